@@ -1,0 +1,83 @@
+"""The one exception tree of the language front end.
+
+Every error a user can cause by what they wrote is an :class:`OscError` carrying a location when one
+is known. ``cli/`` turns these into ``file:line:col: error: message`` plus the source line and a caret;
+nothing below ``cli/`` prints or exits.
+"""
+
+from __future__ import annotations
+
+from coverage_engine.syntax import Location
+
+
+class OscError(Exception):
+    """An error in a scenario, library or parameter file."""
+
+    def __init__(self, message: str | None = None, location: Location | None = None,
+                 source_line: str | None = None, hint: str | None = None) -> None:
+        self.message = message or (self.__doc__ or "error").strip().splitlines()[0]
+        self.location = location
+        self.source_line = source_line
+        self.hint = hint
+        super().__init__(self.message)
+
+    def __str__(self) -> str:
+        if self.location is not None:
+            return f"{self.location}: error: {self.message}"
+        return f"error: {self.message}"
+
+    def render(self, text_of: dict[str, str] | None = None) -> str:
+        """The full message: ``file:line:col: error: msg``, then the source line and a caret when known.
+
+        ``text_of`` maps file names to their text, used when the error did not capture its source line.
+        """
+        lines = [str(self)]
+        source_line = self.source_line
+        loc = self.location
+        if source_line is None and loc is not None and text_of and loc.file in text_of:
+            all_lines = text_of[loc.file].splitlines()
+            if 1 <= loc.line <= len(all_lines):
+                source_line = all_lines[loc.line - 1]
+        if source_line is not None and loc is not None:
+            shown = source_line.rstrip("\r\n").expandtabs(1)
+            lines.append("    " + shown)
+            lines.append("    " + " " * max(loc.column - 1, 0) + "^")
+        if self.hint:
+            lines.append(f"hint: {self.hint}")
+        return "\n".join(lines)
+
+
+class OscSyntaxError(OscError):
+    """syntax error"""
+
+
+class UnsupportedFeatureError(OscSyntaxError):
+    """not supported"""
+
+
+class ImportResolutionError(OscError):
+    """cannot import"""
+
+
+class ResolveError(OscError):
+    """semantic error"""
+
+
+class NameLookupError(ResolveError):
+    """unknown name"""
+
+
+class OscTypeError(ResolveError):
+    """type mismatch"""
+
+
+class ArgumentError(ResolveError):
+    """bad argument"""
+
+
+class ParameterFileError(OscError):
+    """error in the scenario parameter file"""
+
+
+class SceFormatError(OscError):
+    """error in the .sce file"""

@@ -1,0 +1,265 @@
+"""The resolved model: what the resolver hands to the runtime, the variation generator and ``-l``.
+
+Everything here is plain data with names already looked up, types checked, defaults filled in and
+physical values in SI base units. Values that can only be known while a scenario runs (variables,
+external method results) stay as small :data:`Expr` trees that :mod:`coverage_engine.evaluate`
+computes against the current variable values; everything else is folded to :class:`Const`.
+
+Value representation (also what ``log`` prints, as Python ``repr``/``str``):
+``int``, ``float`` (every physical value: SI base unit), ``bool``, ``str``, ``list``,
+``dict`` for struct/actor instances (members in declaration order, inherited ones first) and
+:class:`EnumValue` (prints as ``('name', value)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Union
+
+from coverage_engine.syntax import Location
+
+
+class EnumValue(tuple):
+    """An enum member: a ``(name, numeric value)`` tuple, so it prints the way users expect."""
+
+    __slots__ = ()
+
+    def __new__(cls, name: str, value: int) -> EnumValue:
+        return super().__new__(cls, (name, value))
+
+    @property
+    def name(self) -> str:
+        return self[0]
+
+    @property
+    def value(self) -> int:
+        return self[1]
+
+
+# --------------------------------------------------------------------------------------------------
+# Run-time expressions
+
+
+@dataclass(frozen=True, slots=True)
+class Const:
+    """A value known before the run."""
+
+    value: object
+
+
+@dataclass(frozen=True, slots=True)
+class Variable:
+    """A ``var``: ``key`` is unique within its scenario (``my_actor.my_struct.count``); ``initial`` its start value.
+
+    ``type_name`` is the declared type (``int``, ``float``, ``string``, ``bool``, a physical type or a
+    struct name); ``increment``/``decrement`` need a numeric one.
+    """
+
+    key: str
+    type_name: str
+    initial: Expr
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class VariableRef:
+    """The current value of a variable."""
+
+    variable: Variable
+
+
+@dataclass(frozen=True, slots=True)
+class FieldOf:
+    """A member of a struct value computed at run time: ``target[name]``."""
+
+    target: Expr
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
+class ExternalMethod:
+    """A ``def … is external module.function()`` signature.
+
+    ``parameters`` are ``(name, type_name, default Expr or None)`` in order. The Python function is
+    imported when first called (late), with the working directory and the scenario's directory importable.
+    """
+
+    name: str
+    module: str
+    function: str
+    parameters: tuple[tuple[str, str, Expr | None], ...]
+    return_type: str | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ExternalCall:
+    """A call of an external method; ``arguments`` map every parameter name to its value expression."""
+
+    method: ExternalMethod
+    arguments: tuple[tuple[str, Expr], ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Operation:
+    """An operator applied at run time. ``op``: ``+ - * / % == != < <= > >= and or not neg in``."""
+
+    op: str
+    operands: tuple[Expr, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class MakeList:
+    """A list whose items are computed at run time."""
+
+    items: tuple[Expr, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class MakeStruct:
+    """A struct instance whose members are computed at run time (``dict`` in member order)."""
+
+    type_name: str
+    members: tuple[tuple[str, Expr], ...]
+
+
+Expr = Union[Const, VariableRef, FieldOf, ExternalCall, Operation, MakeList, MakeStruct]
+
+
+# --------------------------------------------------------------------------------------------------
+# Behaviours
+
+
+@dataclass(frozen=True, slots=True)
+class Composite:
+    """``serial``, ``parallel`` or ``one_of`` (``kind``); ``name`` is the label or the kind."""
+
+    kind: str
+    name: str
+    children: tuple[Behavior, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ActionCall:
+    """An action invocation ready to run.
+
+    ``action`` is the declared (qualified) name, e.g. ``log`` or ``robot.move``; ``plugin_names`` the
+    entry-point names to try in order in group ``scenario_execution.actions`` (the action itself first,
+    then the actions it inherits from). ``arguments`` holds every declared parameter in declaration order
+    (defaults filled, keeps applied); parameters without a value are absent. ``actor`` is the associated
+    actor instance for ``actor.action`` invocations, else None.
+    """
+
+    action: str
+    plugin_names: tuple[str, ...]
+    name: str
+    arguments: tuple[tuple[str, Expr], ...]
+    actor: Expr | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class WaitElapsed:
+    """``wait elapsed(duration)``: duration in seconds (simulation time when a simulation runs)."""
+
+    name: str
+    duration: Expr
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class WaitCondition:
+    """``wait <condition>``: running until the condition is true."""
+
+    name: str
+    condition: Expr
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class WaitEvent:
+    """``wait @event``: running until the event (by key) has been emitted."""
+
+    name: str
+    event: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EmitEvent:
+    """``emit event``. The keys ``end`` and ``fail`` end the scenario at once with success or failure."""
+
+    name: str
+    event: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class CallMethod:
+    """``call …``: evaluate an expression for its effect."""
+
+    name: str
+    call: Expr
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Modified:
+    """A modifier wrapped around a behaviour: ``timeout``, ``repeat``, ``retry``, ``inverter``,
+    ``failure_is_running`` … ``success_is_running``.
+
+    ``arguments`` are the modifier's declared parameters with constant values (``duration`` in seconds,
+    ``count`` as int). Several modifiers on one behaviour nest in the order written: the first written is
+    the innermost.
+    """
+
+    modifier: str
+    arguments: tuple[tuple[str, object], ...]
+    child: Behavior
+    location: Location
+
+
+Behavior = Union[Composite, ActionCall, WaitElapsed, WaitCondition, WaitEvent, EmitEvent, CallMethod, Modified]
+
+
+# --------------------------------------------------------------------------------------------------
+# Scenarios
+
+
+@dataclass(frozen=True, slots=True)
+class Parameter:
+    """A scenario-level parameter with its resolved value (structs as dicts) and declared type name."""
+
+    name: str
+    type_name: str
+    value: object
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Scenario:
+    """One scenario ready to run. ``body`` already includes the scenario-level modifiers (``timeout(60s)``)."""
+
+    name: str
+    file: str
+    parameters: tuple[Parameter, ...]
+    variables: tuple[Variable, ...]
+    events: tuple[str, ...]
+    body: Behavior | None
+    location: Location
+
+    def parameter_values(self) -> dict[str, object]:
+        """Parameter name → value, as injected into a simulation's ``reset``."""
+        return {p.name: p.value for p in self.parameters}
+
+
+@dataclass(frozen=True, slots=True)
+class ScenarioFile:
+    """A resolved file: its scenarios in file order, and where it came from."""
+
+    path: str
+    scenarios: tuple[Scenario, ...]
+    search_paths: tuple[str, ...] = field(default=())

@@ -1,0 +1,437 @@
+"""Syntax nodes: the parse tree of an ``.osc`` file as frozen, typed dataclasses.
+
+The parser (``coverage_engine.parser``) builds these in one lark Transformer and puts no meaning
+into them: names are not looked up, units are not converted, nothing is evaluated. The resolver
+(``coverage_engine.resolver``) reads them and builds the model. Every node carries a
+:class:`Location`, so every later error can point at the source.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Union
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """Where a node stands in its file: 1-based line/column of its start and end, and 0-based offsets.
+
+    ``start_pos``/``end_pos`` index the file's text (as read, after CRLF was kept) so tools such as the
+    variation generator can cut and replace the exact source of a node.
+    """
+
+    file: str
+    line: int
+    column: int
+    end_line: int = 0
+    end_column: int = 0
+    start_pos: int = 0
+    end_pos: int = 0
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+# --------------------------------------------------------------------------------------------------
+# Names and types
+
+
+@dataclass(frozen=True, slots=True)
+class QualifiedName:
+    """A dotted declaration or reference name: ``log``, ``robot.move``, ``osc.helpers`` (parts kept apart)."""
+
+    parts: tuple[str, ...]
+    location: Location
+
+    @property
+    def dotted(self) -> str:
+        return ".".join(self.parts)
+
+
+@dataclass(frozen=True, slots=True)
+class TypeRef:
+    """A type as written: ``int``, ``length``, ``position_3d``, ``list of string``."""
+
+    name: QualifiedName
+    is_list: bool
+    location: Location
+
+
+# --------------------------------------------------------------------------------------------------
+# Expressions
+
+
+@dataclass(frozen=True, slots=True)
+class Literal:
+    """A plain literal. ``kind`` is one of ``int``, ``float``, ``bool``, ``string``; ``value`` the Python value.
+
+    Hex integers are already turned into ``int``; strings have their escapes processed.
+    """
+
+    kind: str
+    value: object
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class PhysicalLiteral:
+    """A number followed by a unit name: ``3s``, ``-2.0rad``, ``1.0e3m``. ``number`` is int or float as written."""
+
+    number: int | float
+    unit: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Identifier:
+    """A bare name used as a value: a parameter, variable, global, ``it``, a type name (``base_struct``)."""
+
+    name: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class MemberAccess:
+    """``target.member`` (``foo.x``, ``it.x``, ``lib.factorial``)."""
+
+    target: Expression
+    member: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Argument:
+    """One argument of a call or invocation; ``name`` is None for a positional one."""
+
+    name: str | None
+    value: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Call:
+    """``callee(args)``: a struct constructor, a method call (``lib.factorial(4)``) or ``elapsed(3s)``."""
+
+    callee: Expression
+    arguments: tuple[Argument, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class BinaryOp:
+    """``left op right`` with ``op`` one of ``+ - * / % == != < <= > >= and or in =>``."""
+
+    op: str
+    left: Expression
+    right: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class UnaryOp:
+    """``-operand`` or ``not operand``."""
+
+    op: str
+    operand: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Ternary:
+    """``condition ? if_true : if_false``."""
+
+    condition: Expression
+    if_true: Expression
+    if_false: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ListExpr:
+    """``[a, b, c]`` (possibly empty)."""
+
+    items: tuple[Expression, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class RangeExpr:
+    """``[low..high]``."""
+
+    low: Expression
+    high: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EnumValueRef:
+    """``enum_type!member`` (``enum_type`` may be None when written ``!member``)."""
+
+    enum: str | None
+    member: str
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EventRef:
+    """``@name`` or ``@actor.name`` in ``wait @test``."""
+
+    path: tuple[str, ...]
+    location: Location
+
+
+Expression = Union[
+    Literal, PhysicalLiteral, Identifier, MemberAccess, Call, BinaryOp, UnaryOp, Ternary,
+    ListExpr, RangeExpr, EnumValueRef, EventRef,
+]
+
+
+# --------------------------------------------------------------------------------------------------
+# Members of declarations
+
+
+@dataclass(frozen=True, slots=True)
+class KeepConstraint:
+    """``keep(expr)`` or ``keep(default expr)``; ``location`` spans the whole ``keep(...)``."""
+
+    expression: Expression
+    is_default: bool
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ModifierInvocation:
+    """A modifier applied by name: ``timeout(60s)`` in a body, ``inverter()`` in a ``with:`` block."""
+
+    name: QualifiedName
+    arguments: tuple[Argument, ...]
+    location: Location
+
+
+WithMember = Union[KeepConstraint, ModifierInvocation]
+
+
+@dataclass(frozen=True, slots=True)
+class ParameterDecl:
+    """``a, b: type = default with: keep(...)`` inside a struct/actor/action/scenario/modifier, or global.
+
+    ``is_global`` is set for ``global`` declarations at file level.
+    """
+
+    names: tuple[str, ...]
+    type: TypeRef
+    default: Expression | None
+    with_members: tuple[WithMember, ...]
+    location: Location
+    is_global: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class VariableDecl:
+    """``var a: type = initial`` (the initial value may be an expression evaluated when the run starts)."""
+
+    names: tuple[str, ...]
+    type: TypeRef
+    default: Expression | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EventDecl:
+    """``event name`` (optionally with parameters ``event name(a: int)``)."""
+
+    name: str
+    parameters: tuple[MethodParameter, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class MethodParameter:
+    """A parameter of a method or event signature: ``n: int = 10``."""
+
+    name: str
+    type: TypeRef
+    default: Expression | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class MethodDecl:
+    """``def name(params) -> type is external module.function(args)``.
+
+    ``external`` is the dotted Python path (``module.function``); ``external_arguments`` any arguments
+    written in that call (usually none).
+    """
+
+    name: str
+    parameters: tuple[MethodParameter, ...]
+    return_type: TypeRef | None
+    external: QualifiedName
+    external_arguments: tuple[Argument, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class DoDirective:
+    """``do <behaviour>``: the body of a scenario or action."""
+
+    behavior: Behavior
+    location: Location
+
+
+# --------------------------------------------------------------------------------------------------
+# Behaviours (inside ``do``)
+
+
+@dataclass(frozen=True, slots=True)
+class Composite:
+    """``serial:``/``parallel:``/``one_of:`` with members; ``label`` from ``name: serial:``.
+
+    ``members`` holds behaviours and :class:`ModifierInvocation` s written among them (these apply to the
+    composite itself, e.g. ``repeat()`` inside a ``serial:``). ``arguments`` are any written after the kind
+    (``serial(duration: 3s):``), ``with_members`` those of a trailing ``with:`` block.
+    """
+
+    kind: str
+    label: str | None
+    members: tuple[Behavior | ModifierInvocation, ...]
+    arguments: tuple[Argument, ...]
+    with_members: tuple[WithMember, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Invocation:
+    """An action or scenario invocation: ``log("x")``, ``robot.move(speed: 1m/s) with: keep(...)``.
+
+    ``name`` is the dotted name as written (``robot.move``: an actor instance or type, then the behaviour).
+    """
+
+    label: str | None
+    name: QualifiedName
+    arguments: tuple[Argument, ...]
+    with_members: tuple[WithMember, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Wait:
+    """``wait <expr>``: ``wait elapsed(3s)`` (a :class:`Call` to ``elapsed``), ``wait @event``, ``wait x == 3``."""
+
+    label: str | None
+    condition: Expression
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Emit:
+    """``emit name`` or ``emit name(args)``; ``end`` and ``fail`` are ordinary names here."""
+
+    label: str | None
+    event: str
+    arguments: tuple[Argument, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class CallDirective:
+    """``call lib.method(args)``: run a method for its effect."""
+
+    label: str | None
+    call: Call
+    location: Location
+
+
+Behavior = Union[Composite, Invocation, Wait, Emit, CallDirective]
+
+
+# --------------------------------------------------------------------------------------------------
+# Declarations (file level)
+
+
+@dataclass(frozen=True, slots=True)
+class Import:
+    """``import osc.helpers`` (``is_file`` False, ``path`` ``osc.helpers``) or ``import "rel/file.osc"``."""
+
+    path: str
+    is_file: bool
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class PhysicalTypeDecl:
+    """``type length is SI(m: 1)``; ``exponents`` maps SI base unit names to integer exponents."""
+
+    name: str
+    exponents: tuple[tuple[str, int], ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class UnitDecl:
+    """``unit cm of length is SI(m: 1, factor: 0.01, offset: 0)``; factor/offset None when not written."""
+
+    name: str
+    physical_type: str
+    exponents: tuple[tuple[str, int], ...]
+    factor: float | None
+    offset: float | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EnumMember:
+    """One member of an enum; ``value`` None when not written."""
+
+    name: str
+    value: int | None
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class EnumDecl:
+    """``enum colour: [red, green = 3, blue]``."""
+
+    name: str
+    members: tuple[EnumMember, ...]
+    location: Location
+
+
+Member = Union[ParameterDecl, VariableDecl, EventDecl, MethodDecl, KeepConstraint, ModifierInvocation, DoDirective]
+
+
+@dataclass(frozen=True, slots=True)
+class TypeDecl:
+    """A ``struct``, ``actor``, ``action``, ``scenario`` or ``modifier`` declaration (``kind`` says which).
+
+    ``name`` may be qualified (``robot.move`` declares behaviour ``move`` of actor ``robot``); ``parent``
+    is the ``inherits`` name. ``members`` keep their written order.
+    """
+
+    kind: str
+    name: QualifiedName
+    parent: QualifiedName | None
+    members: tuple[Member, ...]
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Extension:
+    """``extend name:`` with members added to an existing type."""
+
+    name: QualifiedName
+    members: tuple[Member, ...]
+    location: Location
+
+
+Declaration = Union[PhysicalTypeDecl, UnitDecl, EnumDecl, TypeDecl, Extension, ParameterDecl]
+
+
+@dataclass(frozen=True, slots=True)
+class CompilationUnit:
+    """One parsed file: its imports and declarations in written order, and its text for error context."""
+
+    file: str
+    imports: tuple[Import, ...]
+    declarations: tuple[Declaration, ...]
+    text: str = field(repr=False, default="")

@@ -231,12 +231,17 @@ Behavior = Union[Composite, ActionCall, WaitElapsed, WaitCondition, WaitEvent, E
 
 @dataclass(frozen=True, slots=True)
 class Parameter:
-    """A scenario-level parameter with its resolved value (structs as dicts) and declared type name."""
+    """A scenario-level parameter with its resolved value (structs as dicts) and declared type name.
+
+    ``overridable`` is False for parameters a YAML document may not set (actors, defaults that refer
+    to other names); such parameters are left out of the parameter-file template.
+    """
 
     name: str
     type_name: str
     value: object
     location: Location
+    overridable: bool = True
 
 
 @dataclass(frozen=True, slots=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from sqlalchemy import Column, Engine, Integer, MetaData, String, Table, create_engine, event, select
+from sqlalchemy import Column, Engine, Integer, MetaData, String, Table, create_engine, event, select, text
 from sqlalchemy.exc import SQLAlchemyError
 
 #: Shared metadata: table modules register their tables here.
@@ -44,13 +44,26 @@ def store_url(option: str | None = None) -> str:
     return "sqlite:///" + str(Path.cwd() / DEFAULT_STORE_FILE)
 
 
+#: Key of the PostgreSQL advisory lock that serialises schema creation between processes.
+_SCHEMA_LOCK_KEY = 0x5CE5C0DE
+
+
 def _sqlite_pragmas(dbapi_connection, _record) -> None:  # pragma: no cover - trivial
+    # pysqlite's own BEGIN handling is switched off; _sqlite_begin emits BEGIN IMMEDIATE instead.
+    dbapi_connection.isolation_level = None
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=30000")
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.close()
+
+
+def _sqlite_begin(conn) -> None:  # pragma: no cover - trivial
+    # Take the write lock at the start of every transaction: a transaction that reads and then writes
+    # would otherwise fail at once with "database is locked" when another process wrote in between
+    # (WAL snapshot conflict), and the busy timeout does not help there.
+    conn.exec_driver_sql("BEGIN IMMEDIATE")
 
 
 def open_engine(url: str | None = None) -> Engine:
@@ -60,6 +73,7 @@ def open_engine(url: str | None = None) -> Engine:
         if url.startswith("sqlite"):
             engine = create_engine(url, connect_args={"timeout": 30})
             event.listen(engine, "connect", _sqlite_pragmas)
+            event.listen(engine, "begin", _sqlite_begin)
         else:
             engine = create_engine(url, pool_pre_ping=True)
     except (SQLAlchemyError, ImportError, ValueError) as exc:
@@ -68,10 +82,16 @@ def open_engine(url: str | None = None) -> Engine:
 
 
 def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
-    """Create missing tables (all, or just ``tables``) and refuse a store made by an incompatible version."""
+    """Create missing tables (all, or just ``tables``) and refuse a store made by an incompatible version.
+
+    Safe when several processes open a fresh store at once: everything runs in one transaction that
+    holds an advisory lock on PostgreSQL and the write lock on SQLite, so "create if missing" cannot race.
+    """
     try:
-        store_meta.create(engine, checkfirst=True)
         with engine.begin() as conn:
+            if conn.dialect.name == "postgresql":
+                conn.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": _SCHEMA_LOCK_KEY})
+            store_meta.create(conn, checkfirst=True)
             row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
             if row is None:
                 conn.execute(store_meta.insert().values(key="schema", value="scenario-coverage",
@@ -80,7 +100,7 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
                 raise StoreError(
                     f"the store at {engine.url.render_as_string(hide_password=True)} has schema version {row[0]}, "
                     f"this release reads version {SCHEMA_VERSION}; use a new store (--store) or a matching release")
-        metadata.create_all(engine, tables=tables, checkfirst=True)
+            metadata.create_all(conn, tables=tables, checkfirst=True)
     except StoreError:
         raise
     except SQLAlchemyError as exc:

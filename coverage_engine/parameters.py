@@ -1,0 +1,80 @@
+"""Scenario parameter files: read their YAML documents, and write a template of all overridable parameters.
+
+Several documents in one file (``---``) mean several runs: the executor runs every scenario once per
+document. The template holds each scenario's overridable parameters with their current values in SI
+base units, structs as mappings and enums by name, so that reading it back changes nothing.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from coverage_engine.errors import ParameterFileError
+from coverage_engine.model import EnumValue, ScenarioFile
+
+
+def read_parameter_documents(path: str | Path) -> list[dict]:
+    """The documents of a parameter file, in order; an empty file is one empty document."""
+    import yaml
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParameterFileError(f"{path}: scenario parameter file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterFileError(f"{path}: cannot read scenario parameter file: {exc}") from exc
+    try:
+        documents = list(yaml.safe_load_all(text))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(path)
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise ParameterFileError(f"{where}: invalid YAML: {problem}") from exc
+    if not documents:
+        return [{}]
+    result: list[dict] = []
+    for index, doc in enumerate(documents):
+        if doc is None:
+            doc = {}
+        if not isinstance(doc, dict):
+            raise ParameterFileError(f"{path}: document {index + 1} must be a mapping of scenario names to "
+                                     f"parameters, got {type(doc).__name__}")
+        result.append(doc)
+    return result
+
+
+def template_values(scenario_file: ScenarioFile) -> dict[str, dict[str, object]]:
+    """Scenario name → overridable parameter name → current value, as plain YAML data."""
+    return {s.name: {p.name: _plain(p.value) for p in s.parameters if p.overridable}
+            for s in scenario_file.scenarios}
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, EnumValue):
+        return value.name
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def write_parameter_template(scenario_path: str | Path, template_path: str | Path) -> None:
+    """Write the template for ``scenario_path`` to ``template_path``; never overwrites an existing file."""
+    import yaml
+
+    from coverage_engine.loader import load_scenario_file
+
+    target = Path(template_path)
+    if target.exists():
+        raise ParameterFileError(f"{target}: file exists; not overwriting it (remove it or choose another name)")
+    model = load_scenario_file(scenario_path)
+    text = yaml.safe_dump(template_values(model), sort_keys=False, default_flow_style=False, allow_unicode=True)
+    try:
+        with open(target, "x", encoding="utf-8") as handle:
+            handle.write(text)
+    except FileExistsError:
+        raise ParameterFileError(f"{target}: file exists; not overwriting it") from None
+    except OSError as exc:
+        raise ParameterFileError(f"{target}: cannot write template: {exc.strerror}") from exc

@@ -1,0 +1,239 @@
+"""The resolver's type objects: primitive, physical, enum, compound (struct/actor/…) and list types.
+
+Types know their zero value and how to check and convert a value given to them (a literal, a folded
+expression or a YAML override). They carry no syntax nodes except the declaration they came from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from coverage_engine import syntax
+from coverage_engine.model import EnumValue
+
+
+class OscType:
+    """Base of every type; ``name`` as users write it."""
+
+    name: str = "?"
+    kind: str = "?"
+
+    def __str__(self) -> str:
+        return self.name
+
+
+@dataclass(eq=False)
+class PrimitiveType(OscType):
+    """``int``, ``uint``, ``float``, ``bool``, ``string``."""
+
+    name: str
+    kind: str = "primitive"
+
+
+@dataclass(eq=False)
+class PhysicalType(OscType):
+    """A quantity with SI exponents (``length``: m¹); values are floats in the SI base unit."""
+
+    name: str
+    exponents: tuple[tuple[str, int], ...]
+    location: syntax.Location | None = None
+    kind: str = "physical"
+
+
+@dataclass(eq=False)
+class Unit:
+    """A unit of a physical type: ``value_si = number * factor + offset``."""
+
+    name: str
+    physical: PhysicalType
+    factor: float
+    offset: float
+    location: syntax.Location | None = None
+
+
+@dataclass(eq=False)
+class EnumType(OscType):
+    """An enum with its members (name → number) in declaration order."""
+
+    name: str
+    members: dict[str, int]
+    location: syntax.Location | None = None
+    kind: str = "enum"
+
+    def value(self, member: str) -> EnumValue:
+        return EnumValue(member, self.members[member])
+
+
+@dataclass(eq=False)
+class ListType(OscType):
+    """``list of element``."""
+
+    element: OscType
+    kind: str = "list"
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return f"list of {self.element.name}"
+
+
+@dataclass(eq=False)
+class FieldDecl:
+    """A parameter member of a compound type (``x: length = 1m``)."""
+
+    name: str
+    type: OscType
+    default: syntax.Expression | None
+    with_members: tuple
+    owner: CompoundType
+    location: syntax.Location
+
+
+@dataclass(eq=False)
+class VarDecl:
+    """A ``var`` member of a compound type."""
+
+    name: str
+    type: OscType
+    initial: syntax.Expression | None
+    owner: CompoundType
+    location: syntax.Location
+
+
+@dataclass(eq=False)
+class CompoundType(OscType):
+    """A struct, actor, action, scenario or modifier; members are merged with the parent's, parent first.
+
+    ``qualified`` is the declared name (``robot.move``); ``name`` its last part as users refer to it
+    inside an actor, ``qualified`` otherwise.
+    """
+
+    kind: str
+    qualified: str
+    declaration: syntax.TypeDecl | None
+    parent: CompoundType | None = None
+    fields: dict[str, FieldDecl] = field(default_factory=dict)
+    variables: dict[str, VarDecl] = field(default_factory=dict)
+    events: dict[str, syntax.EventDecl] = field(default_factory=dict)
+    methods: dict[str, syntax.MethodDecl] = field(default_factory=dict)
+    keeps: list[syntax.KeepConstraint] = field(default_factory=list)
+    modifiers: list[syntax.ModifierInvocation] = field(default_factory=list)
+    body: syntax.DoDirective | None = None
+    behaviors: dict[str, CompoundType] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return self.qualified
+
+    def ancestry(self) -> list[CompoundType]:
+        """This type and its parents, nearest first."""
+        chain, node = [], self
+        while node is not None:
+            chain.append(node)
+            node = node.parent
+        return chain
+
+    def is_a(self, other: CompoundType) -> bool:
+        return any(t is other for t in self.ancestry())
+
+
+INT = PrimitiveType("int")
+UINT = PrimitiveType("uint")
+FLOAT = PrimitiveType("float")
+BOOL = PrimitiveType("bool")
+STRING = PrimitiveType("string")
+#: The type of ``it``/events/``elapsed(...)`` calls and of things no value is expected from.
+ANY = PrimitiveType("any")
+
+PRIMITIVES: dict[str, PrimitiveType] = {t.name: t for t in (INT, UINT, FLOAT, BOOL, STRING)}
+
+
+def is_numeric(t: OscType) -> bool:
+    return t is INT or t is UINT or t is FLOAT
+
+
+def zero_value(t: OscType) -> object:
+    """The value of a parameter of type ``t`` that has no default and no given value."""
+    if t is INT or t is UINT:
+        return 0
+    if t is FLOAT or isinstance(t, PhysicalType):
+        return 0.0
+    if t is BOOL:
+        return False
+    if t is STRING:
+        return ""
+    if isinstance(t, ListType):
+        return []
+    if isinstance(t, EnumType):
+        first = next(iter(t.members))
+        return t.value(first)
+    return None
+
+
+class ConversionError(Exception):
+    """A value does not fit a type; the message says why (the caller adds the location)."""
+
+
+def convert(value: object, t: OscType, where: str = "value") -> object:
+    """Check ``value`` (a plain Python value) against ``t`` and convert it (int→float, number→string…).
+
+    Struct values must already be dicts of converted members; this checks the shape only for
+    primitives, physical values, enums and lists. Used for folded expressions and YAML overrides.
+    """
+    if t is ANY:
+        return value
+    if t is STRING:
+        if isinstance(value, str):
+            return value
+        if isinstance(value, bool):
+            raise ConversionError(f"{where}: expected string, got bool")
+        if isinstance(value, (int, float)):
+            return str(value)
+        raise ConversionError(f"{where}: expected string, got {_kind(value)}")
+    if t is BOOL:
+        if isinstance(value, bool):
+            return value
+        raise ConversionError(f"{where}: expected bool, got {_kind(value)}")
+    if t is INT or t is UINT:
+        if isinstance(value, int) and not isinstance(value, bool):
+            if t is UINT and value < 0:
+                raise ConversionError(f"{where}: expected uint, got negative {value}")
+            return value
+        raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
+    if t is FLOAT or isinstance(t, PhysicalType):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
+    if isinstance(t, EnumType):
+        if isinstance(value, EnumValue) and value.name in t.members:
+            return value
+        if isinstance(value, str) and value in t.members:
+            return t.value(value)
+        raise ConversionError(f"{where}: expected a member of enum {t.name} ({', '.join(t.members)}), "
+                              f"got {value!r}")
+    if isinstance(t, ListType):
+        if not isinstance(value, list):
+            raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
+        return [convert(v, t.element, f"{where}[{i}]") for i, v in enumerate(value)]
+    if isinstance(t, CompoundType):
+        if isinstance(value, dict):
+            return value
+        raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
+    return value
+
+
+def _kind(value: object) -> str:
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int):
+        return "int"
+    if isinstance(value, float):
+        return "float"
+    if isinstance(value, str):
+        return "string"
+    if isinstance(value, list):
+        return "list"
+    if isinstance(value, dict):
+        return "struct"
+    if isinstance(value, EnumValue):
+        return "enum value"
+    return type(value).__name__

@@ -1,0 +1,217 @@
+"""Find the dimensions of a variation: every ``keep(… in [v1, v2, …])`` that lists the values to try.
+
+A dimension is one such constraint in a scenario:
+
+* ``keep(it.<param> in [...])`` in the ``with:`` block of a behaviour invocation
+  (``log() with: keep(it.msg in ["foo", "bar"])``), anywhere in the scenario's ``do`` tree;
+* ``keep(<param> in [...])`` among a scenario's members, and ``keep(it[.<member>] in [...])`` in the
+  ``with:`` block of a scenario parameter (``param1: test_struct with: keep(it.member2 in [...])``).
+
+Only a literal list (``ListExpr``) on the right makes a dimension; ranges (``[1..5]``) and other
+``in`` constraints are left to the resolver. The finder reads the syntax tree and never resolves;
+each value keeps its exact source text (cut by :class:`~coverage_engine.syntax.Location` offsets), so
+a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
+
+Dimensions are returned in source order: the first keep in the file is the first dimension, and in
+the cartesian product it varies slowest.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from coverage_engine import syntax as s
+
+
+@dataclass(frozen=True, slots=True)
+class Choice:
+    """One value of a dimension.
+
+    ``text`` is its source text on one line (what replaces the list); ``stored`` the value recorded in
+    the assignment: the Python value for a plain literal (number, string, boolean), else ``text``.
+    """
+
+    text: str
+    stored: object
+    location: s.Location
+
+
+@dataclass(frozen=True, slots=True)
+class Dimension:
+    """One ``keep(<left> in [...])`` to vary.
+
+    ``key`` names it in headers and assignments (``<scenario>.<path>``); ``target`` is the same for
+    dimensions constraining the same parameter (they are checked together, see
+    :mod:`coverage_engine.variation.validate`). ``start``/``end`` are the offsets of the ``in``
+    expression in the file text; ``left`` the source text of its left operand.
+    """
+
+    key: str
+    scenario: str
+    target: tuple
+    left: str
+    choices: tuple[Choice, ...]
+    start: int
+    end: int
+    location: s.Location
+
+    def replacement(self, choice: int) -> str:
+        """The source text replacing the ``in`` expression for ``choices[choice]``."""
+        return f"{self.left} == {self.choices[choice].text}"
+
+
+def one_line(text: str) -> str:
+    """``text`` with comments removed and each line break (with its indentation) turned into a blank.
+
+    String literals are left untouched (OSC strings never contain a raw line break).
+    """
+    if "\n" not in text and "#" not in text:
+        return text
+    out: list[str] = []
+    quote = ""
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if quote:
+            out.append(c)
+            if c == "\\" and i + 1 < n:
+                out.append(text[i + 1])
+                i += 1
+            elif c == quote:
+                quote = ""
+        elif c in "'\"":
+            quote = c
+            out.append(c)
+        elif c == "#":
+            while i < n and text[i] != "\n":
+                i += 1
+            continue
+        elif c in "\r\n":
+            while i < n and text[i] in " \t\r\n":
+                i += 1
+            if out and out[-1] != " ":
+                out.append(" ")
+            continue
+        else:
+            out.append(c)
+        i += 1
+    return "".join(out).strip()
+
+
+def _cut(text: str, location: s.Location) -> str:
+    return text[location.start_pos:location.end_pos]
+
+
+def _path(expr: s.Expression) -> list[str] | None:
+    """``it.a.b`` → ``["it", "a", "b"]``; ``speed`` → ``["speed"]``; None for anything else."""
+    if isinstance(expr, s.Identifier):
+        return [expr.name]
+    if isinstance(expr, s.MemberAccess):
+        inner = _path(expr.target)
+        return None if inner is None else inner + [expr.member]
+    return None
+
+
+def _stored(item: s.Expression, text: str) -> object:
+    if isinstance(item, s.Literal) and item.kind in ("int", "float", "bool", "string"):
+        return item.value
+    if isinstance(item, s.UnaryOp) and item.op == "-" and isinstance(item.operand, s.Literal) \
+            and item.operand.kind in ("int", "float"):
+        return -item.operand.value
+    return text
+
+
+def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: list[str],
+                    owner_target: tuple | None) -> Dimension | None:
+    """The dimension of ``keep`` if it is ``<left> in [list]``.
+
+    ``owner`` is the path of what ``it`` means here (an invocation step or a parameter name) and
+    ``owner_target`` the identity of an invocation (None for scenario members); a left side not
+    starting with ``it`` names scenario members.
+    """
+    expr = keep.expression
+    if not (isinstance(expr, s.BinaryOp) and expr.op == "in" and isinstance(expr.right, s.ListExpr)):
+        return None
+    parts = _path(expr.left)
+    if parts is None or not expr.right.items:
+        return None
+    path = owner + parts[1:] if parts[0] == "it" else parts
+    if parts[0] == "it" and owner_target is not None:
+        target: tuple = (*owner_target, tuple(parts[1:]))
+    else:
+        target = (scenario, "member", tuple(path))
+    choices = []
+    for item in expr.right.items:
+        item_text = one_line(_cut(text, item.location))
+        choices.append(Choice(item_text, _stored(item, item_text), item.location))
+    return Dimension(key=".".join([scenario, *path]), scenario=scenario, target=target,
+                     left=one_line(_cut(text, expr.left.location)), choices=tuple(choices),
+                     start=expr.location.start_pos, end=expr.location.end_pos, location=keep.location)
+
+
+def _invocations(behavior: s.Behavior | s.ModifierInvocation) -> Iterator[s.Invocation]:
+    if isinstance(behavior, s.Invocation):
+        yield behavior
+    elif isinstance(behavior, s.Composite):
+        for member in behavior.members:
+            yield from _invocations(member)
+
+
+def _keeps(members) -> Iterator[s.KeepConstraint]:
+    return (m for m in members if isinstance(m, s.KeepConstraint))
+
+
+def _scenario_dimensions(decl: s.TypeDecl, text: str) -> Iterator[Dimension]:
+    scenario = decl.name.dotted
+    for member in decl.members:
+        found: list[Dimension | None] = []
+        if isinstance(member, s.ParameterDecl):
+            for name in member.names:
+                found += [_keep_dimension(k, text, scenario, [name], None)
+                          for k in _keeps(member.with_members)]
+                break  # ``a, b: int with: keep(...)``: one constraint text, named after the first
+        elif isinstance(member, s.KeepConstraint):
+            found.append(_keep_dimension(member, text, scenario, [], None))
+        elif isinstance(member, s.DoDirective):
+            invocations = list(_invocations(member.behavior))
+            names = Counter(inv.name.dotted for inv in invocations if inv.label is None)
+            seen: Counter = Counter()
+            for inv in invocations:
+                step = inv.label or inv.name.dotted
+                if inv.label is None:
+                    if names[step] > 1:
+                        step = f"{step}[{seen[step]}]"
+                    seen[inv.name.dotted] += 1
+                found += [_keep_dimension(k, text, scenario, [step],
+                                          (scenario, "invocation", inv.location.start_pos))
+                          for k in _keeps(inv.with_members)]
+        yield from (d for d in found if d is not None)
+
+
+def find_dimensions(unit: s.CompilationUnit, text: str | None = None) -> list[Dimension]:
+    """The dimensions of every scenario in ``unit``, in source order (first one varies slowest)."""
+    text = unit.text if text is None else text
+    found: list[Dimension] = []
+    for decl in unit.declarations:
+        if isinstance(decl, s.TypeDecl) and decl.kind == "scenario":
+            found.extend(_scenario_dimensions(decl, text))
+    found.sort(key=lambda d: d.start)
+    _check_disjoint(found)
+    return found
+
+
+def _check_disjoint(dimensions: list[Dimension]) -> None:
+    """Nested lists (a keep inside a value of another) cannot be cut apart: refuse them clearly."""
+    from coverage_engine.errors import UnsupportedFeatureError
+
+    for before, after in zip(dimensions, dimensions[1:]):
+        if after.start < before.end:
+            raise UnsupportedFeatureError("a varied constraint inside another varied constraint cannot be "
+                                          "expanded", after.location)
+
+
+def scenario_names(unit: s.CompilationUnit) -> list[str]:
+    """Names of the scenarios declared in ``unit``, in file order."""
+    return [d.name.dotted for d in unit.declarations if isinstance(d, s.TypeDecl) and d.kind == "scenario"]

@@ -1,0 +1,108 @@
+"""What a batch is made of: the scenario files of the input folder, the shard to keep, the launch command.
+
+The launch command is a list of argument templates; ``{SCENARIO}`` and ``{OUTPUT_DIR}`` are replaced
+inside each argument and no shell ever sees the result.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from executor.batch.errors import BadCommand, BadShard, NoScenarios
+from store.jobs import JobSpec
+
+SCENARIO = "{SCENARIO}"
+OUTPUT_DIR = "{OUTPUT_DIR}"
+
+#: File name endings of scenario files (OpenSCENARIO DSL files and the variants written by scenario_variation).
+SCENARIO_SUFFIXES = (".sce", ".osc")
+
+#: Scenario texts up to this size are kept in the store, so workers on other hosts can run them.
+MAX_STORED_TEXT = 1024 * 1024
+
+
+def discover(input_dir: str | os.PathLike[str]) -> list[Path]:
+    """The .sce and .osc files directly in ``input_dir``, sorted by name; :class:`NoScenarios` if none."""
+    folder = Path(input_dir)
+    if not folder.is_dir():
+        raise NoScenarios(f"input folder {str(folder)!r} does not exist or is not a folder")
+    files = sorted((p for p in folder.iterdir() if p.suffix in SCENARIO_SUFFIXES and p.is_file()),
+                   key=lambda p: p.name)
+    if not files:
+        raise NoScenarios(f"no .sce or .osc file in {str(folder)!r}")
+    names = [p.stem for p in files]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise NoScenarios(f"{', '.join(duplicates)}: a .sce and an .osc file share a name, "
+                          "their output folders would collide")
+    return files
+
+
+@dataclass(frozen=True)
+class Shard:
+    """The ``index``-th (1-based) of ``count`` disjoint subsets of the files."""
+
+    index: int
+    count: int
+
+    @classmethod
+    def parse(cls, text: str) -> Shard:
+        try:
+            index_text, count_text = text.split("/")
+            index, count = int(index_text), int(count_text)
+        except ValueError:
+            raise BadShard(f"--shard {text!r}: expected i/N, e.g. 2/8") from None
+        if count < 1 or not 1 <= index <= count:
+            raise BadShard(f"--shard {text!r}: need 1 <= i <= N")
+        return cls(index, count)
+
+    def keeps(self, sha: str) -> bool:
+        """Whether a file whose content hashes to ``sha`` belongs to this shard (stable across hosts and runs)."""
+        return int(sha[:16], 16) % self.count == self.index - 1
+
+
+def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec]:
+    """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
+    specs = []
+    for path in files:
+        data = path.read_bytes()
+        sha = hashlib.sha256(data).hexdigest()
+        if shard is not None and not shard.keeps(sha):
+            continue
+        text = None
+        if len(data) <= MAX_STORED_TEXT:
+            try:
+                text = data.decode("utf-8")
+            except UnicodeDecodeError:
+                text = None
+            if text is not None and "\x00" in text:
+                text = None
+        specs.append(JobSpec(name=path.stem, scenario_path=str(path.resolve()), scenario_sha=sha,
+                             scenario_text=text))
+    return specs
+
+
+def check_command(command: Sequence[str], *, require_executable: bool = True) -> tuple[str, ...]:
+    """Validate the launch command: non-empty, with both placeholders, its program found on PATH."""
+    if not command:
+        raise BadCommand("no launch command given; put it after --, e.g. "
+                         "-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}")
+    missing = [p for p in (SCENARIO, OUTPUT_DIR) if not any(p in arg for arg in command)]
+    if missing:
+        raise BadCommand(f"the launch command must contain {' and '.join(missing)} "
+                         f"(got: {' '.join(command)})")
+    program = command[0]
+    if require_executable and SCENARIO not in program and OUTPUT_DIR not in program:
+        if shutil.which(program) is None:
+            raise BadCommand(f"launch command not found: {program}")
+    return tuple(command)
+
+
+def substitute(command: Sequence[str], scenario: str, output_dir: str) -> list[str]:
+    """The argument list for one job: placeholders replaced inside every argument."""
+    return [arg.replace(SCENARIO, scenario).replace(OUTPUT_DIR, output_dir) for arg in command]

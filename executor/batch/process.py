@@ -1,0 +1,159 @@
+"""One child process of a batch job: its own process group, its log file, its timeout and cancellation.
+
+The child's stdout and stderr go straight into ``log.txt`` (the kernel writes them, so nothing is lost
+when the child or this process dies); with ``echo`` they pass through a pipe and are copied to the log
+and to the terminal as they arrive. A timeout or a cancel signals the whole process group, then kills
+it after a grace period; whatever is left of the group when the child exits is killed too.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import BinaryIO
+
+_CHUNK = 64 * 1024
+
+
+@dataclass(frozen=True)
+class ProcessOutcome:
+    """How a child process ended."""
+
+    returncode: int | None
+    started_at: float
+    finished_at: float
+    timed_out: bool = False
+    cancelled: bool = False
+
+    @property
+    def signal_name(self) -> str | None:
+        """Name of the signal that ended the child, if one did."""
+        if self.returncode is None or self.returncode >= 0:
+            return None
+        try:
+            return signal.Signals(-self.returncode).name
+        except ValueError:
+            return f"signal {-self.returncode}"
+
+
+def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
+    """Send ``sig`` to process group ``pgid``; False if the group is gone."""
+    try:
+        os.killpg(pgid, sig)
+        return True
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return False
+
+
+class ChildProcess:
+    """Start a command in a new session and wait for it; ``cancel`` may be called from another thread."""
+
+    def __init__(self, argv: Sequence[str], log_path: str, *, cwd: str | None = None,
+                 timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None) -> None:
+        self.argv = list(argv)
+        self.log_path = log_path
+        self.cwd = cwd
+        self.timeout = timeout
+        self.grace = grace
+        self.echo = echo
+        self.proc: subprocess.Popen[bytes] | None = None
+        self._lock = threading.Lock()
+        self._timers: list[threading.Timer] = []
+        self._timed_out = False
+        self._cancelled = False
+        self._started_at = 0.0
+
+    @property
+    def pid(self) -> int | None:
+        return None if self.proc is None else self.proc.pid
+
+    def start(self) -> int:
+        """Spawn the child (no shell, own process group); raises OSError when it cannot be started."""
+        self._started_at = time.time()
+        with open(self.log_path, "wb") as log:
+            self.proc = subprocess.Popen(
+                self.argv, cwd=self.cwd, stdin=subprocess.DEVNULL,
+                stdout=subprocess.PIPE if self.echo is not None else log, stderr=subprocess.STDOUT,
+                start_new_session=True, close_fds=True)
+        if self.timeout is not None:
+            self._arm(self.timeout, self._on_timeout)
+        return self.proc.pid
+
+    def wait(self) -> ProcessOutcome:
+        """Block until the child exits (copying its output when echoing); end what is left of its group."""
+        assert self.proc is not None, "start() first"
+        copier = None
+        if self.echo is not None:
+            copier = threading.Thread(target=self._copy, name=f"log-{self.proc.pid}", daemon=True)
+            copier.start()
+        returncode = self.proc.wait()
+        finished = time.time()
+        with self._lock:
+            for timer in self._timers:
+                timer.cancel()
+            self._timers.clear()
+            kill_group(self.proc.pid)          # grandchildren left behind die with the job
+        if copier is not None:
+            copier.join(timeout=5.0)
+        return ProcessOutcome(returncode=returncode, started_at=self._started_at, finished_at=finished,
+                              timed_out=self._timed_out, cancelled=self._cancelled and not self._timed_out)
+
+    def cancel(self, grace: float | None = None) -> None:
+        """Ask the child's group to stop (SIGINT), kill it after ``grace`` seconds (0: at once)."""
+        grace = self.grace if grace is None else grace
+        with self._lock:
+            self._cancelled = True
+            if self.proc is None or self.proc.returncode is not None:
+                return
+            if grace <= 0:
+                kill_group(self.proc.pid)
+                return
+            kill_group(self.proc.pid, signal.SIGINT)
+            self._arm_locked(grace, self._on_grace_over)
+
+    def _arm(self, delay: float, action) -> None:
+        with self._lock:
+            self._arm_locked(delay, action)
+
+    def _arm_locked(self, delay: float, action) -> None:
+        timer = threading.Timer(delay, action)
+        timer.daemon = True
+        self._timers.append(timer)
+        timer.start()
+
+    def _on_timeout(self) -> None:
+        with self._lock:
+            if self.proc is None or self.proc.returncode is not None:
+                return
+            self._timed_out = True
+            kill_group(self.proc.pid, signal.SIGTERM)
+            self._arm_locked(self.grace, self._on_grace_over)
+
+    def _on_grace_over(self) -> None:
+        with self._lock:
+            if self.proc is not None:
+                kill_group(self.proc.pid)
+
+    def _copy(self) -> None:
+        assert self.proc is not None and self.proc.stdout is not None and self.echo is not None
+        stream = self.proc.stdout
+        with open(self.log_path, "ab") as log:
+            while True:
+                data = stream.read1(_CHUNK) if hasattr(stream, "read1") else stream.read(_CHUNK)
+                if not data:
+                    break
+                log.write(data)
+                log.flush()
+                try:
+                    self.echo.write(data)
+                    self.echo.flush()
+                except (OSError, ValueError):
+                    pass
+        stream.close()

@@ -1,0 +1,109 @@
+"""Judging one attempt: from how the child ended and the test.xml it wrote to a job state and a reason.
+
+A job passes when its process exits 0 and its test.xml has testcases and no failure or error;
+``ignore_return_value`` judges by test.xml alone. No readable test.xml, a death by signal and a
+timeout are infrastructure errors (``error``/``timeout``) that ``--retries`` may repeat; a scenario
+that ran and failed is ``failed`` and never repeated.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from executor.batch.junit_read import JunitUnreadable, clean_text, has_problem, read_cases
+from executor.batch.process import ProcessOutcome
+from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
+from store.states import JobState
+
+RESULT_FILE = "test.xml"
+LOG_FILE = "log.txt"
+
+
+@dataclass(frozen=True)
+class FileMark:
+    """What a file looked like before the attempt, so a stale result from an earlier run is not taken."""
+
+    signature: tuple[int, int, int] | None
+
+    @classmethod
+    def of(cls, path: Path) -> FileMark:
+        try:
+            st = path.stat()
+        except OSError:
+            return cls(None)
+        return cls((st.st_mtime_ns, st.st_size, st.st_ino))
+
+    def changed(self, path: Path) -> bool:
+        return FileMark.of(path).signature not in (None, self.signature)
+
+
+def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
+    """The last ``limit`` bytes of a log, decoded leniently and cleaned for XML and the store."""
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(0, os.SEEK_END)
+            size = handle.tell()
+            handle.seek(max(0, size - limit))
+            data = handle.read()
+    except OSError:
+        return ""
+    text = data.decode("utf-8", errors="replace")
+    if size > limit:
+        text = "[… earlier output in log.txt]\n" + text.split("\n", 1)[-1]
+    return clean_text(text)
+
+
+def read_result(path: Path, mark: FileMark) -> tuple[str | None, str | None]:
+    """The test.xml text the attempt wrote (None if none) and why it cannot be used (None if it can)."""
+    if not mark.changed(path):
+        return None, "no test.xml written"
+    try:
+        size = path.stat().st_size
+        if size > JUNIT_MAX_BYTES:
+            return None, f"test.xml is {size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
+        text = path.read_bytes().decode("utf-8", errors="replace")
+    except OSError as exc:
+        return None, f"cannot read test.xml: {exc.strerror}"
+    try:
+        cases = read_cases(text)
+    except JunitUnreadable as exc:
+        return clean_text(text), str(exc)
+    if not cases:
+        return clean_text(text), "test.xml holds no testcase"
+    return clean_text(text), None
+
+
+def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_return_value: bool = False,
+          timeout: float | None = None) -> JobResult:
+    """The result of one attempt, ready to be written to the store."""
+    xml_text, unreadable = read_result(output_dir / RESULT_FILE, mark)
+    rc = outcome.returncode
+    if outcome.cancelled:
+        status, reason = JobState.CANCELLED, "cancelled"
+    elif outcome.timed_out:
+        status, reason = JobState.TIMEOUT, f"timed out after {timeout:g} s" if timeout else "timed out"
+    elif unreadable is not None:
+        status = JobState.ERROR
+        ended = f"killed by {outcome.signal_name}" if outcome.signal_name else f"exit code {rc}"
+        reason = f"{unreadable} ({ended})"
+    elif has_problem(read_cases(xml_text or "")):
+        status, reason = JobState.FAILED, "test.xml reports a failure"
+    elif outcome.signal_name and not ignore_return_value:
+        status, reason = JobState.ERROR, f"killed by {outcome.signal_name}"
+    elif rc != 0 and not ignore_return_value:
+        status, reason = JobState.FAILED, f"exit code {rc}"
+    else:
+        status, reason = JobState.PASSED, None
+    return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,
+                     finished_at=outcome.finished_at, reason=reason, junit_xml=xml_text,
+                     log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
+                     log_path=str(output_dir / LOG_FILE))
+
+
+def launch_failure(output_dir: Path, started_at: float, finished_at: float, message: str) -> JobResult:
+    """The result of an attempt whose command could not even be started."""
+    return JobResult(status=JobState.ERROR, exit_code=None, started_at=started_at, finished_at=finished_at,
+                     reason=message, log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
+                     log_path=str(output_dir / LOG_FILE))

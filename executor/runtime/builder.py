@@ -1,0 +1,166 @@
+"""Build the py_trees tree of one scenario from the resolved model.
+
+``serial`` → ``Sequence(memory=True)``; ``parallel`` → ``Parallel`` that succeeds when all children
+did; ``one_of`` → ``Parallel`` that ends as soon as one child ends; members keep their label as
+name. Actions are plugin instances whose arguments are bound here: the ones their ``__init__`` names
+are computed now, the rest each time the action starts (see :mod:`executor.actions.base`).
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+
+import py_trees
+from py_trees.common import ParallelPolicy
+
+from coverage_engine.errors import OscError
+from coverage_engine.evaluate import evaluate
+from coverage_engine.model import (
+    ActionCall,
+    Behavior,
+    CallMethod,
+    Composite,
+    EmitEvent,
+    Modified,
+    Scenario,
+    VariableRef,
+    WaitCondition,
+    WaitElapsed,
+    WaitEvent,
+)
+
+from executor.actions.registry import load_action_class
+from executor.runtime import behaviours
+from executor.runtime.context import ScenarioContext, VariableHandle
+from executor.runtime.modifiers import ModifierError, build_modifier
+
+
+class BuildError(OscError):
+    """cannot build the behaviour tree"""
+
+
+def build_tree(scenario: Scenario, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
+    """The root of the scenario's tree: a sequence named after the scenario holding its body."""
+    root = py_trees.composites.Sequence(name=scenario.name, memory=True)
+    if scenario.body is not None:
+        root.add_child(build_behavior(scenario.body, context))
+    return root
+
+
+def build_behavior(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
+    """One model behaviour (and everything below it) as a py_trees behaviour."""
+    if isinstance(node, Composite):
+        if node.kind == "serial":
+            composite = py_trees.composites.Sequence(name=node.name, memory=True)
+        elif node.kind == "parallel":
+            composite = py_trees.composites.Parallel(name=node.name, policy=ParallelPolicy.SuccessOnAll())
+        elif node.kind == "one_of":
+            composite = py_trees.composites.Parallel(name=node.name, policy=ParallelPolicy.SuccessOnOne())
+        else:
+            raise BuildError(f"unknown composition '{node.kind}'", node.location)
+        for child in node.children:
+            composite.add_child(build_behavior(child, context))
+        return composite
+    if isinstance(node, ActionCall):
+        return make_action(node, context)
+    if isinstance(node, Modified):
+        child = build_behavior(node.child, context)
+        try:
+            return build_modifier(node.modifier, dict(node.arguments), child, context)
+        except ModifierError as exc:
+            raise BuildError(str(exc), node.location) from exc
+    if isinstance(node, WaitElapsed):
+        return behaviours.WaitElapsed(node.name, node.duration, context)
+    if isinstance(node, WaitCondition):
+        return behaviours.WaitCondition(node.name, node.condition, context)
+    if isinstance(node, WaitEvent):
+        return behaviours.WaitEvent(node.name, node.event, context)
+    if isinstance(node, EmitEvent):
+        return behaviours.EmitEvent(node.name, node.event, context)
+    if isinstance(node, CallMethod):
+        return behaviours.CallMethod(node.name, node.call, context)
+    raise BuildError(f"cannot run {type(node).__name__}", getattr(node, "location", None))
+
+
+# --------------------------------------------------------------------------------------------------
+# Actions
+
+
+def _parameters(function) -> tuple[dict[str, inspect.Parameter], bool]:
+    """Named parameters of ``function`` (without self) and whether it takes ``**kwargs``."""
+    try:
+        signature = inspect.signature(function)
+    except (TypeError, ValueError):
+        return {}, True
+    named, var_keyword = {}, False
+    for parameter in signature.parameters.values():
+        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
+            var_keyword = True
+        elif parameter.kind is not inspect.Parameter.VAR_POSITIONAL and parameter.name != "self":
+            named[parameter.name] = parameter
+    return named, var_keyword
+
+
+def make_action(call: ActionCall, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
+    """Instantiate the plugin for ``call`` with its arguments bound; raises :class:`BuildError`."""
+    cls = load_action_class(call)
+    if not issubclass(cls, py_trees.behaviour.Behaviour):
+        raise BuildError(f"plugin for action '{call.action}' ({cls.__name__}) is not a py_trees behaviour "
+                         "(derive it from executor.actions.ActionBase)", call.location)
+    arguments = dict(call.arguments)
+    if call.actor is not None:
+        arguments["associated_actor"] = call.actor
+
+    init_parameters, _ = _parameters(cls.__init__)
+    init_names = [n for n in init_parameters if n in arguments]
+    missing = [n for n, p in init_parameters.items()
+               if p.default is inspect.Parameter.empty and n not in arguments]
+    if missing:
+        raise BuildError(f"action '{call.action}': {cls.__name__}.__init__() needs {_names(missing)}, "
+                         "which the invocation does not give", call.location)
+    try:
+        init_values = {n: context.value(arguments[n]) for n in init_names}
+        instance = cls(**init_values)
+    except OscError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - plugin code or an external method
+        raise BuildError(f"action '{call.action}': cannot create {cls.__name__}: {type(exc).__name__}: {exc}",
+                         call.location) from exc
+
+    rest = {n: e for n, e in arguments.items() if n not in init_values}
+    execute = getattr(instance, "execute", None)
+    if execute is not None:
+        execute_parameters, takes_any = _parameters(execute)
+        selected = rest if takes_any else {n: e for n, e in rest.items() if n in execute_parameters}
+        missing = [n for n, p in execute_parameters.items()
+                   if p.default is inspect.Parameter.empty and n not in selected]
+        if missing:
+            raise BuildError(f"action '{call.action}': {cls.__name__}.execute() needs {_names(missing)}, "
+                             "which the invocation does not give", call.location)
+        if hasattr(instance, "_execute_arguments"):
+            instance._execute_arguments = _argument_binder(instance, selected, context)
+    instance.name = call.name
+    instance.logger = context.logger.child(call.name)
+    return instance
+
+
+def _names(names: list[str]) -> str:
+    return ", ".join(f"'{n}'" for n in names)
+
+
+def _argument_binder(instance, selected: dict, context: ScenarioContext) -> Callable[[], dict]:
+    """A function computing ``execute``'s keyword arguments from the current variable values."""
+    variables = context.variables
+
+    def arguments() -> dict:
+        handles = not getattr(instance, "resolve_variable_reference_arguments_in_execute", True)
+        values = {}
+        for name, expr in selected.items():
+            if handles and isinstance(expr, VariableRef):
+                values[name] = VariableHandle(expr.variable.key, variables)
+            else:
+                values[name] = evaluate(expr, variables)
+        return values
+
+    return arguments

@@ -1,0 +1,78 @@
+"""Run-time state of one scenario: variables, events, clock, directories, and how it ends.
+
+Behaviours and actions share one :class:`ScenarioContext` per scenario run. Variables are kept by
+:attr:`coverage_engine.model.Variable.key`, so nested ``var`` members (``actor.struct.count``) are
+as easy to reach as scenario-level ones. ``emit end``/``emit fail`` raise :class:`ScenarioEnd`, which
+unwinds the tick at once: nothing after them runs, in the same serial or anywhere else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from coverage_engine.evaluate import evaluate
+from coverage_engine.model import Expr, Scenario
+
+from executor.runtime.logger import Logger
+
+
+class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error
+    """``emit end`` (success) or ``emit fail`` (failure): ends the scenario immediately."""
+
+    def __init__(self, success: bool, message: str = "") -> None:
+        super().__init__(message or ("end" if success else "fail"))
+        self.success = success
+        self.message = message
+
+
+class Aborted(Exception):  # noqa: N818 - raised by the signal handler
+    """SIGINT/SIGTERM arrived: the running scenario is recorded as failed and nothing else runs."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"aborted by signal {signum}")
+        self.signum = signum
+
+
+class VariableHandle:
+    """A writable reference to a ``var``, handed to actions that change variables (``increment``)."""
+
+    __slots__ = ("key", "_store")
+
+    def __init__(self, key: str, store: dict[str, object]) -> None:
+        self.key = key
+        self._store = store
+
+    def get_value(self) -> object:
+        return self._store[self.key]
+
+    def set_value(self, value: object) -> None:
+        self._store[self.key] = value
+
+    def __repr__(self) -> str:
+        return f"VariableHandle({self.key!r}={self._store.get(self.key)!r})"
+
+
+@dataclass
+class ScenarioContext:
+    """Everything a running scenario's behaviours share."""
+
+    name: str
+    clock: object
+    logger: Logger
+    input_dir: str | None = None
+    output_dir: str | None = None
+    simulation: object | None = None
+    variables: dict[str, object] = field(default_factory=dict)
+    events: set[str] = field(default_factory=set)
+    #: run_process actions by their name (label), for process_log_check
+    processes: dict[str, list] = field(default_factory=dict)
+
+    def init_variables(self, scenario: Scenario) -> None:
+        """Give every ``var`` its initial value (in declaration order, so one may use another)."""
+        for variable in scenario.variables:
+            initial = variable.initial
+            self.variables[variable.key] = None if initial is None else evaluate(initial, self.variables)
+
+    def value(self, expr: Expr) -> object:
+        """The current value of a model expression."""
+        return evaluate(expr, self.variables)

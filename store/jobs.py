@@ -1,0 +1,161 @@
+"""Frozen records the queue hands out and takes back: batches, jobs, results, worker identities.
+
+They are plain data built from database rows with ``from_row``; all SQL stays in :mod:`store.queue`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import uuid
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from store.states import JobState
+
+#: Bytes of a job's log kept in the store (the full log stays in the job's output folder).
+LOG_TAIL_BYTES = 64 * 1024
+
+#: Largest child JUnit XML stored; a bigger one is replaced by an error saying so.
+JUNIT_MAX_BYTES = 8 * 1024 * 1024
+
+
+@dataclass(frozen=True)
+class BatchOptions:
+    """How the jobs of a batch are run; stored with the batch so any worker runs them alike."""
+
+    timeout: float | None = None
+    retries: int = 0
+    post_run: tuple[str, ...] = ()
+    ignore_return_value: bool = False
+    halt_on_failure: bool = False
+    grace: float = 5.0
+    shard: str | None = None
+
+    def to_json(self) -> str:
+        data = asdict(self)
+        data["post_run"] = list(self.post_run)
+        return json.dumps(data, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> BatchOptions:
+        data = json.loads(text)
+        known = {k: v for k, v in data.items() if k in cls.__dataclass_fields__}
+        known["post_run"] = tuple(known.get("post_run") or ())
+        return cls(**known)
+
+
+@dataclass(frozen=True)
+class Batch:
+    """A set of jobs created by one command line, with the command and options to run them."""
+
+    id: int
+    created_at: float
+    mode: str
+    input_dir: str
+    output_dir: str
+    host: str
+    command: tuple[str, ...]
+    options: BatchOptions
+
+    @classmethod
+    def from_row(cls, row: Mapping[str, Any]) -> Batch:
+        return cls(
+            id=row["id"], created_at=row["created_at"], mode=row["mode"], input_dir=row["input_dir"],
+            output_dir=row["output_dir"], host=row["host"], command=tuple(json.loads(row["command"])),
+            options=BatchOptions.from_json(row["options"]),
+        )
+
+
+@dataclass(frozen=True)
+class JobSpec:
+    """One scenario file to enqueue."""
+
+    name: str
+    scenario_path: str
+    scenario_sha: str
+    scenario_text: str | None = None
+
+
+@dataclass(frozen=True)
+class Job:
+    """A job row as read from the store; ``attempts`` doubles as the fencing token of the current lease."""
+
+    id: int
+    batch_id: int
+    seq: int
+    name: str
+    scenario_path: str
+    scenario_sha: str
+    status: JobState
+    attempts: int = 0
+    retried: int = 0
+    lost: int = 0
+    worker_id: str | None = None
+    worker_host: str | None = None
+    worker_pid: int | None = None
+    child_pid: int | None = None
+    lease_expires_at: float | None = None
+    queued_at: float | None = None
+    started_at: float | None = None
+    finished_at: float | None = None
+    duration: float | None = None
+    exit_code: int | None = None
+    reason: str | None = None
+    output_dir: str | None = None
+    junit_xml: str | None = field(default=None, repr=False)
+    log_tail: str | None = field(default=None, repr=False)
+
+    @classmethod
+    def from_row(cls, row: Mapping[str, Any]) -> Job:
+        values = {name: row[name] for name in cls.__dataclass_fields__ if name in row}
+        values["status"] = JobState(values["status"])
+        return cls(**values)
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """What one attempt of a job produced; written to the store in one transaction."""
+
+    status: JobState
+    exit_code: int | None
+    started_at: float
+    finished_at: float
+    reason: str | None = None
+    junit_xml: str | None = field(default=None, repr=False)
+    log_tail: str | None = field(default=None, repr=False)
+    output_dir: str | None = None
+    log_path: str | None = None
+
+    @property
+    def duration(self) -> float:
+        return max(0.0, self.finished_at - self.started_at)
+
+
+@dataclass(frozen=True)
+class WorkerIdentity:
+    """Who holds a lease: a unique id plus the host and process, so a dead local holder can be detected."""
+
+    id: str
+    host: str
+    pid: int
+
+    @classmethod
+    def current(cls) -> WorkerIdentity:
+        host = socket.gethostname()
+        pid = os.getpid()
+        return cls(id=f"{host}:{pid}:{uuid.uuid4().hex[:8]}", host=host, pid=pid)
+
+
+@dataclass(frozen=True)
+class Reclaimed:
+    """A job taken back from a holder that lost its lease, with the child process it may have left."""
+
+    job_id: int
+    attempt: int
+    worker_id: str | None
+    worker_host: str | None
+    child_pid: int | None
+    status: JobState

@@ -1,0 +1,261 @@
+"""The durable job queue: every SQL statement about batches and jobs lives here.
+
+Methods are verbs (``enqueue``, ``claim``, ``finish``, ``heartbeat``, ``reclaim_expired`` …); each
+state change is one guarded ``UPDATE`` whose ``WHERE status IN (…)`` comes from :mod:`store.states`
+and whose row count is checked, so a late or duplicate result is refused instead of overwriting.
+
+Claiming takes queued rows with ``SELECT … FOR UPDATE SKIP LOCKED`` inside ``UPDATE … RETURNING`` on
+PostgreSQL; on SQLite the same statement runs inside ``BEGIN IMMEDIATE`` (see :func:`open_engine`).
+A store object keeps one connection and is used from one thread.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+
+from sqlalchemy import Connection, Engine, func, insert, select, update
+from sqlalchemy.exc import DBAPIError, SQLAlchemyError
+
+from store import states
+from store.database import StoreError, ensure_schema, open_engine
+from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
+from store.queue_queries import QueueQueries
+from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
+from store.states import JobState, Transition
+
+#: Seconds a claim holds a job without a heartbeat.
+DEFAULT_LEASE = 60.0
+
+#: Lease expirations after which a job ends as ``error`` instead of being queued again.
+DEFAULT_MAX_LOST = 3
+
+#: Columns handed out with a job; the large result columns are read only for reports.
+_JOB_COLUMNS = [c for c in jobs.c if c.name not in ("junit_xml", "log_tail", "scenario_text")]
+
+
+class LeaseLost(StoreError):
+    """The job is no longer held by this worker (its lease expired and was taken over, or it ended)."""
+
+
+class StoreUnavailable(StoreError):
+    """The store could not be reached or was busy; the operation may be retried later."""
+
+
+def _values(states_: Iterable[JobState]) -> list[str]:
+    return sorted(s.value for s in states_)
+
+
+class QueueStore(QueueQueries):
+    """The batch queue in one SQLAlchemy store (SQLite file or PostgreSQL database); reads are inherited."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self._conn: Connection | None = None
+
+    @classmethod
+    def open(cls, url: str | None = None) -> QueueStore:
+        """Open the store at ``url`` (``--store``, ``$SCENARIO_STORE`` or the default file) and create tables."""
+        engine = open_engine(url)
+        ensure_schema(engine, QUEUE_TABLES)
+        return cls(engine)
+
+    @property
+    def url(self) -> str:
+        return self.engine.url.render_as_string(hide_password=True)
+
+    def close(self) -> None:
+        """Return the connection and dispose of the engine's pool."""
+        self._drop()
+        self.engine.dispose()
+
+    def _drop(self) -> None:
+        if self._conn is not None:
+            try:
+                self._conn.close()
+            except SQLAlchemyError:
+                pass
+            self._conn = None
+
+    @contextmanager
+    def _tx(self) -> Iterator[Connection]:
+        """One transaction on the kept connection; connection trouble becomes :class:`StoreUnavailable`."""
+        try:
+            if self._conn is None:
+                self._conn = self.engine.connect()
+            with self._conn.begin():
+                yield self._conn
+        except DBAPIError as exc:
+            self._drop()
+            if exc.connection_invalidated or isinstance(exc.orig, (OSError,)) or _is_transient(exc):
+                raise StoreUnavailable(f"store {self.url} unavailable: {exc.orig}") from exc
+            raise StoreError(f"store {self.url}: {exc.orig}") from exc
+
+    # ----------------------------------------------------------------- transitions
+    @staticmethod
+    def _move(conn: Connection, transition: Transition, target: JobState, where: Sequence,
+              values: dict, returning: Sequence = ()) -> list:
+        """Run the one guarded UPDATE of ``transition``; return the rows it changed (ids or ``returning``)."""
+        states.check(transition, target)
+        stmt = (update(jobs)
+                .where(jobs.c.status.in_(_values(states.sources(transition))), *where)
+                .values(status=target.value, **values)
+                .returning(*(returning or [jobs.c.id])))
+        return conn.execute(stmt).all()
+
+    @staticmethod
+    def _holder(job: Job) -> list:
+        """The guard that makes a result count only from the lease holder of this very attempt."""
+        return [jobs.c.id == job.id, jobs.c.worker_id == job.worker_id, jobs.c.attempts == job.attempts]
+
+    # ----------------------------------------------------------------- batches
+    def create_batch(self, *, mode: str, input_dir: str, output_dir: str, host: str,
+                     command: Sequence[str], options: BatchOptions, specs: Sequence[JobSpec]) -> Batch:
+        """Create a batch and enqueue one job per spec, in one transaction (all or nothing)."""
+        now = time.time()
+        with self._tx() as conn:
+            batch_id = conn.execute(insert(batches).values(
+                created_at=now, mode=mode, input_dir=input_dir, output_dir=output_dir, host=host,
+                command=json.dumps(list(command)), options=options.to_json()).returning(batches.c.id)).scalar_one()
+            self._enqueue(conn, batch_id, specs, now)
+            row = conn.execute(select(batches).where(batches.c.id == batch_id)).mappings().one()
+        return Batch.from_row(row)
+
+    def enqueue(self, batch_id: int, specs: Sequence[JobSpec]) -> int:
+        """Add jobs to an existing batch; returns how many were added."""
+        with self._tx() as conn:
+            return self._enqueue(conn, batch_id, specs, time.time())
+
+    @staticmethod
+    def _enqueue(conn: Connection, batch_id: int, specs: Sequence[JobSpec], now: float) -> int:
+        start = conn.execute(select(func.coalesce(func.max(jobs.c.seq), -1))
+                             .where(jobs.c.batch_id == batch_id)).scalar_one() + 1
+        rows = [dict(batch_id=batch_id, seq=start + i, name=s.name, scenario_path=s.scenario_path,
+                     scenario_sha=s.scenario_sha, scenario_text=s.scenario_text,
+                     status=JobState.QUEUED.value, attempts=0, retried=0, lost=0, queued_at=now)
+                for i, s in enumerate(specs)]
+        if rows:
+            conn.execute(insert(jobs), rows)
+        return len(rows)
+
+    # ----------------------------------------------------------------- the worker's verbs
+    def claim(self, worker: WorkerIdentity, *, limit: int = 1, batch_id: int | None = None,
+              shared_only: bool = False, lease: float = DEFAULT_LEASE) -> list[Job]:
+        """Take up to ``limit`` queued jobs (lowest batch, then file order) and a lease on each."""
+        now = time.time()
+        pick = select(jobs.c.id).where(jobs.c.status == JobState.QUEUED.value)
+        if batch_id is not None:
+            pick = pick.where(jobs.c.batch_id == batch_id)
+        elif shared_only:
+            pick = pick.where(jobs.c.batch_id.in_(select(batches.c.id).where(batches.c.mode == "shared")))
+        # A CTE, not "id IN (subquery)": PostgreSQL may rescan such a subquery per row and lock more rows
+        # than the LIMIT; a CTE with FOR UPDATE is always evaluated once.
+        picked = (pick.order_by(jobs.c.batch_id, jobs.c.seq).limit(limit)
+                  .with_for_update(skip_locked=True, of=jobs).cte("picked"))
+        with self._tx() as conn:
+            rows = self._move(conn, Transition.CLAIM, JobState.RUNNING, [jobs.c.id == picked.c.id],
+                              dict(attempts=jobs.c.attempts + 1, worker_id=worker.id, worker_host=worker.host,
+                                   worker_pid=worker.pid, child_pid=None, lease_expires_at=now + lease,
+                                   started_at=now, finished_at=None, reason=None),
+                              returning=_JOB_COLUMNS)
+        claimed = [Job.from_row(r._mapping) for r in rows]
+        claimed.sort(key=lambda j: (j.batch_id, j.seq))
+        return claimed
+
+    def started(self, job: Job, child_pid: int) -> bool:
+        """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
+        with self._tx() as conn:
+            stmt = update(jobs).where(jobs.c.status == JobState.RUNNING.value, *self._holder(job)) \
+                .values(child_pid=child_pid)
+            return conn.execute(stmt).rowcount == 1
+
+    def heartbeat(self, worker: WorkerIdentity, lease: float = DEFAULT_LEASE) -> set[int]:
+        """Extend the leases of every job ``worker`` runs; returns the ids it still holds."""
+        with self._tx() as conn:
+            rows = conn.execute(update(jobs)
+                                .where(jobs.c.worker_id == worker.id, jobs.c.status == JobState.RUNNING.value)
+                                .values(lease_expires_at=time.time() + lease).returning(jobs.c.id)).all()
+        return {r[0] for r in rows}
+
+    def finish(self, job: Job, result: JobResult) -> None:
+        """Record the verdict of the attempt ``job`` holds; :class:`LeaseLost` if it is not ours any more."""
+        self._end(job, result, Transition.FINISH, result.status, {})
+
+    def retry(self, job: Job, result: JobResult) -> None:
+        """Record a failed attempt and queue the job again (infrastructure errors with retries left)."""
+        self._end(job, result, Transition.RETRY, JobState.QUEUED,
+                  dict(retried=jobs.c.retried + 1, lease_expires_at=None))
+
+    def cancel(self, job: Job, result: JobResult) -> None:
+        """Record an attempt stopped by the user; ``--resume`` runs the job again."""
+        self._end(job, result, Transition.CANCEL, JobState.CANCELLED, dict(lease_expires_at=None))
+
+    def _end(self, job: Job, result: JobResult, transition: Transition, target: JobState, extra: dict) -> None:
+        values = dict(exit_code=result.exit_code, finished_at=result.finished_at, duration=result.duration,
+                      reason=result.reason, junit_xml=result.junit_xml, log_tail=result.log_tail,
+                      output_dir=result.output_dir, lease_expires_at=None)
+        values.update(extra)
+        with self._tx() as conn:
+            if not self._move(conn, transition, target, self._holder(job), values):
+                raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
+            conn.execute(insert(job_attempts).values(
+                job_id=job.id, attempt=job.attempts, outcome=result.status.value, exit_code=result.exit_code,
+                started_at=result.started_at, finished_at=result.finished_at, worker_id=job.worker_id,
+                host=job.worker_host, log_path=result.log_path, reason=result.reason))
+
+    def halt(self, batch_id: int, reason: str = "not started: the batch was halted") -> int:
+        """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""
+        with self._tx() as conn:
+            return len(self._move(conn, Transition.HALT, JobState.CANCELLED, [jobs.c.batch_id == batch_id],
+                                  dict(reason=reason)))
+
+    def resume(self, batch_id: int) -> int:
+        """Queue the batch's cancelled jobs again; returns how many."""
+        with self._tx() as conn:
+            return len(self._move(conn, Transition.RESUME, JobState.QUEUED, [jobs.c.batch_id == batch_id],
+                                  dict(reason=None)))
+
+    def reclaim_expired(self, max_lost: int = DEFAULT_MAX_LOST, now: float | None = None) -> list[Reclaimed]:
+        """Take back running jobs whose lease expired: queue them again, or end them as ``error``."""
+        now = time.time() if now is None else now
+        return self._reclaim([jobs.c.lease_expires_at < now], max_lost, "lease expired")
+
+    def reclaim_worker(self, worker_id: str, reason: str, max_lost: int = DEFAULT_MAX_LOST) -> list[Reclaimed]:
+        """Take back the running jobs of a holder known to be dead (e.g. a killed runner on this host)."""
+        return self._reclaim([jobs.c.worker_id == worker_id], max_lost, reason)
+
+    def _reclaim(self, where: list, max_lost: int, reason: str) -> list[Reclaimed]:
+        cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
+                jobs.c.lost]
+        now = time.time()
+        out: list[Reclaimed] = []
+        with self._tx() as conn:
+            requeued = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
+                                  [*where, jobs.c.lost + 1 < max_lost],
+                                  dict(lost=jobs.c.lost + 1, lease_expires_at=None, reason=reason),
+                                  returning=cols)
+            abandoned = self._move(conn, Transition.ABANDON, JobState.ERROR,
+                                   [*where, jobs.c.lost + 1 >= max_lost],
+                                   dict(lost=jobs.c.lost + 1, lease_expires_at=None, finished_at=now,
+                                        reason=f"{reason} {max_lost} times; the job keeps losing its worker"),
+                                   returning=cols)
+            for rows, status in ((requeued, JobState.QUEUED), (abandoned, JobState.ERROR)):
+                for r in rows:
+                    out.append(Reclaimed(job_id=r.id, attempt=r.attempts, worker_id=r.worker_id,
+                                         worker_host=r.worker_host, child_pid=r.child_pid, status=status))
+            if out:
+                conn.execute(insert(job_attempts), [
+                    dict(job_id=r.job_id, attempt=r.attempt, outcome="lost", finished_at=now,
+                         worker_id=r.worker_id, host=r.worker_host, reason=reason) for r in out])
+        return out
+
+
+def _is_transient(exc: DBAPIError) -> bool:
+    """Errors worth retrying: lost connections, a locked SQLite file, serialization failures."""
+    text = str(exc.orig).lower()
+    markers = ("database is locked", "could not connect", "connection", "server closed", "terminating",
+               "deadlock", "could not serialize", "timeout", "ssl")
+    return exc.connection_invalidated or any(m in text for m in markers)
+

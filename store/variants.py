@@ -1,0 +1,305 @@
+"""What ``scenario_variation`` generated: source files, variation runs and one row per variant.
+
+Tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
+
+``source_files``
+    one row per distinct (path, SHA-256) of an abstract ``.osc``, with its text.
+``variation_runs``
+    one row per ``scenario_variation`` invocation: when, the options as JSON, the source.
+``variants``
+    one row per concrete variant. Its identity is ``content_hash``, the SHA-256 of the ``.sce`` text
+    (unique): regenerating the same input updates the same rows instead of adding new ones.
+    ``file_path`` is the absolute path of the ``.sce`` as last written; when a later run replaces the
+    ``.sce`` files of an output folder, rows of earlier runs there lose their ``file_path`` (NULL), so a
+    lookup by path (what the batch executor does) finds exactly the variant now in that file.
+    ``assignment`` is a JSON object (``"scenario.path": value``) and ``run_id`` the last run that wrote it.
+
+Writes are executemany batches inside one transaction, fed from an iterator, so 100,000 rows take
+seconds and memory does not grow with their number.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from itertools import islice
+
+from sqlalchemy import (
+    Column,
+    DateTime,
+    Engine,
+    ForeignKey,
+    Index,
+    Integer,
+    String,
+    Table,
+    Text,
+    UniqueConstraint,
+    and_,
+    insert,
+    select,
+    update,
+)
+from sqlalchemy.exc import SQLAlchemyError
+
+from store.database import StoreError, ensure_schema, metadata
+
+source_files = Table(
+    "source_files",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("path", Text, nullable=False),
+    Column("sha256", String(64), nullable=False),
+    Column("text", Text, nullable=False),
+    UniqueConstraint("path", "sha256", name="uq_source_files_path_sha256"),
+)
+
+variation_runs = Table(
+    "variation_runs",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("created_at", DateTime(timezone=True), nullable=False),
+    Column("options", Text, nullable=False),
+    Column("source_id", Integer, ForeignKey("source_files.id"), nullable=False),
+    Column("output_dir", Text, nullable=True),
+    Column("variant_count", Integer, nullable=True),
+    Column("skipped_count", Integer, nullable=True),
+)
+
+variants = Table(
+    "variants",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("source_id", Integer, ForeignKey("source_files.id"), nullable=False),
+    Column("run_id", Integer, ForeignKey("variation_runs.id"), nullable=False),
+    Column("scenario", Text, nullable=False),
+    Column("idx", Integer, nullable=False),
+    Column("assignment", Text, nullable=False),
+    Column("sce_text", Text, nullable=False),
+    Column("content_hash", String(64), nullable=False),
+    Column("file_path", Text, nullable=True),
+    Column("output_dir", Text, nullable=True),
+    UniqueConstraint("content_hash", name="uq_variants_content_hash"),
+    Index("ix_variants_file_path", "file_path"),
+    Index("ix_variants_source_idx", "source_id", "idx"),
+)
+
+TABLES = [source_files, variation_runs, variants]
+
+#: Rows per executemany batch.
+BATCH_SIZE = 2000
+
+
+@dataclass(frozen=True)
+class VariantRecord:
+    """One variant to record: its index, scenario, assignment, ``.sce`` text and where it was written."""
+
+    index: int
+    scenario: str
+    assignment: Mapping[str, object]
+    sce_text: str
+    file_path: str | None = None
+    content_hash: str | None = None
+
+
+@dataclass(frozen=True)
+class StoredVariant:
+    """A row of ``variants`` as read back."""
+
+    id: int
+    source_id: int
+    run_id: int
+    scenario: str
+    index: int
+    assignment: dict[str, object]
+    content_hash: str
+    file_path: str | None
+    sce_text: str
+
+    @classmethod
+    def from_row(cls, row) -> StoredVariant:
+        return cls(id=row.id, source_id=row.source_id, run_id=row.run_id, scenario=row.scenario,
+                   index=row.idx, assignment=json.loads(row.assignment), content_hash=row.content_hash,
+                   file_path=row.file_path, sce_text=row.sce_text)
+
+
+def content_hash(sce_text: str) -> str:
+    """The identity of a variant: SHA-256 (hex) of its ``.sce`` text."""
+    return hashlib.sha256(sce_text.encode("utf-8")).hexdigest()
+
+
+def assignment_json(assignment: Mapping[str, object]) -> str:
+    """The stored form of an assignment: compact JSON, keys in generation (dimension) order."""
+    return json.dumps(dict(assignment), ensure_ascii=False, separators=(", ", ": "))
+
+
+def _upsert(engine: Engine, table: Table, index_elements: list[str], update_columns: list[str] | None):
+    """``INSERT … ON CONFLICT`` for SQLite and PostgreSQL; None for other dialects."""
+    name = engine.dialect.name
+    if name == "sqlite":
+        from sqlalchemy.dialects.sqlite import insert as dialect_insert
+    elif name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert as dialect_insert
+    else:
+        return None
+    stmt = dialect_insert(table)
+    if not update_columns:
+        return stmt.on_conflict_do_nothing(index_elements=index_elements)
+    return stmt.on_conflict_do_update(index_elements=index_elements,
+                                      set_={c: getattr(stmt.excluded, c) for c in update_columns})
+
+
+def _source_id(conn, path: str, sha256: str, text: str) -> int:
+    row = conn.execute(select(source_files.c.id).where(
+        and_(source_files.c.path == path, source_files.c.sha256 == sha256))).first()
+    if row is not None:
+        return row[0]
+    return conn.execute(insert(source_files).values(path=path, sha256=sha256, text=text)).inserted_primary_key[0]
+
+
+def _batches(rows: Iterable[dict], size: int) -> Iterator[list[dict]]:
+    iterator = iter(rows)
+    while batch := list(islice(iterator, size)):
+        yield batch
+
+
+def record_variation(engine: Engine, *, source_path: str, source_sha256: str, source_text: str,
+                     options: Mapping[str, object], output_dir: str | None,
+                     records: Iterable[VariantRecord], skipped: int = 0) -> int:
+    """Record one variation run and its variants (streamed from ``records``); returns the run id.
+
+    Idempotent: a variant whose ``.sce`` text is already stored (same content hash) is updated (its
+    run, file path) instead of inserted again. Rows of earlier runs that pointed into ``output_dir``
+    lose their ``file_path``, since their files were replaced by this run. Everything happens in one
+    transaction: a failure leaves the store as it was.
+    """
+    ensure_schema(engine, TABLES)
+    try:
+        with engine.begin() as conn:
+            source_id = _source_id(conn, source_path, source_sha256, source_text)
+            run_id = conn.execute(insert(variation_runs).values(
+                created_at=datetime.now(timezone.utc), options=json.dumps(dict(options), default=str),
+                source_id=source_id, output_dir=output_dir, skipped_count=skipped)).inserted_primary_key[0]
+            upsert = _upsert(engine, variants, ["content_hash"], ["run_id", "file_path", "output_dir", "idx"])
+
+            def rows() -> Iterator[dict]:
+                for record in records:
+                    yield {
+                        "source_id": source_id, "run_id": run_id, "scenario": record.scenario,
+                        "idx": record.index, "assignment": assignment_json(record.assignment),
+                        "sce_text": record.sce_text,
+                        "content_hash": record.content_hash or content_hash(record.sce_text),
+                        "file_path": record.file_path, "output_dir": output_dir,
+                    }
+
+            count = 0
+            for batch in _batches(rows(), BATCH_SIZE):
+                count += len(batch)
+                if upsert is not None:
+                    conn.execute(upsert, batch)
+                else:  # pragma: no cover - neither SQLite nor PostgreSQL
+                    _portable_upsert(conn, batch)
+            if output_dir is not None:
+                conn.execute(update(variants).where(and_(
+                    variants.c.output_dir == output_dir, variants.c.run_id != run_id)).values(file_path=None))
+            conn.execute(update(variation_runs).where(variation_runs.c.id == run_id).values(variant_count=count))
+    except SQLAlchemyError as exc:
+        raise StoreError(f"cannot record variants in {engine.url.render_as_string(hide_password=True)}: "
+                         f"{exc}") from exc
+    return run_id
+
+
+def _portable_upsert(conn, batch: list[dict]) -> None:  # pragma: no cover - other dialects
+    hashes = [row["content_hash"] for row in batch]
+    known = set(conn.execute(select(variants.c.content_hash).where(variants.c.content_hash.in_(hashes))).scalars())
+    fresh = [row for row in batch if row["content_hash"] not in known]
+    if fresh:
+        conn.execute(insert(variants), fresh)
+    for row in batch:
+        if row["content_hash"] in known:
+            conn.execute(update(variants).where(variants.c.content_hash == row["content_hash"]).values(
+                run_id=row["run_id"], file_path=row["file_path"], output_dir=row["output_dir"], idx=row["idx"]))
+
+
+def _like_escape(text: str) -> str:
+    return text.replace("\\", "\\\\").replace("%", "\\%").replace("_", "\\_")
+
+
+def _key_matches(wanted: str, key: str) -> bool:
+    return key == wanted or key.endswith("." + wanted)
+
+
+def find_variants(engine: Engine, assignment: Mapping[str, object] | None = None, *,
+                  source_path: str | None = None, scenario: str | None = None,
+                  current_only: bool = False, **values: object) -> list[StoredVariant]:
+    """Variants whose assignment has all the given values, in (source, index) order.
+
+    ``assignment`` keys must equal stored keys (``"test.log.msg"``); keyword arguments match a stored
+    key equal to the name or ending in ``.name`` (``msg="foo"``). Values compare as JSON values. The
+    database narrows the rows with ``LIKE`` on the JSON text (works on SQLite and PostgreSQL alike),
+    the exact comparison happens here. ``current_only`` keeps rows that still have a file.
+    """
+    wanted: list[tuple[str, object, bool]] = [(k, v, True) for k, v in (assignment or {}).items()]
+    wanted += [(k, v, False) for k, v in values.items()]
+    ensure_schema(engine, TABLES)
+    query = select(variants)
+    conditions = []
+    for _key, value, _exact in wanted:
+        conditions.append(variants.c.assignment.like(
+            "%: " + _like_escape(json.dumps(value, ensure_ascii=False)) + "%", escape="\\"))
+    if source_path is not None:
+        query = query.join(source_files, source_files.c.id == variants.c.source_id)
+        conditions.append(source_files.c.path == source_path)
+    if scenario is not None:
+        conditions.append(variants.c.scenario == scenario)
+    if current_only:
+        conditions.append(variants.c.file_path.is_not(None))
+    if conditions:
+        query = query.where(and_(*conditions))
+    query = query.order_by(variants.c.source_id, variants.c.idx, variants.c.id)
+    found = []
+    try:
+        with engine.connect() as conn:
+            for row in conn.execute(query):
+                stored = json.loads(row.assignment)
+                if all(any((k == key if exact else _key_matches(key, k)) and _same_value(v, value)
+                           for k, v in stored.items())
+                       for key, value, exact in wanted):
+                    found.append(StoredVariant.from_row(row))
+    except SQLAlchemyError as exc:
+        raise StoreError(f"cannot read variants: {exc}") from exc
+    return found
+
+
+def _same_value(stored: object, wanted: object) -> bool:
+    """JSON equality: ``1 == 1.0`` but ``True != 1``; tuples compare like lists."""
+    if isinstance(wanted, tuple):
+        wanted = list(wanted)
+    if isinstance(stored, bool) or isinstance(wanted, bool):
+        return type(stored) is type(wanted) and stored == wanted
+    return stored == wanted
+
+
+def variant_for_file(engine: Engine, file_path: str) -> StoredVariant | None:
+    """The variant now in ``file_path`` (absolute), or None (what the batch executor joins onto)."""
+    ensure_schema(engine, TABLES)
+    with engine.connect() as conn:
+        row = conn.execute(select(variants).where(variants.c.file_path == file_path)
+                           .order_by(variants.c.run_id.desc()).limit(1)).first()
+    return None if row is None else StoredVariant.from_row(row)
+
+
+def count_rows(engine: Engine) -> dict[str, int]:
+    """Row counts of the three tables (for tests and ``--list``-style summaries)."""
+    from sqlalchemy import func
+
+    ensure_schema(engine, TABLES)
+    with engine.connect() as conn:
+        return {t.name: conn.execute(select(func.count()).select_from(t)).scalar_one() for t in TABLES}
+
+
+__all__ = ["TABLES", "StoredVariant", "VariantRecord", "content_hash", "count_rows", "find_variants",
+           "record_variation", "source_files", "variant_for_file", "variants", "variation_runs"]

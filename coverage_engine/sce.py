@@ -31,7 +31,7 @@ Why this shape:
 * Everything written is deterministic (no time stamps): the SHA-256 of the text is the variant's
   identity in the store, and regenerating the same input gives byte-identical files.
 
-Writing never goes through a YAML emitter: :class:`SceWriter` fills a template of pre-quoted parts,
+Writing never goes through a YAML emitter: :class:`SceTemplate` fills a template of pre-quoted parts,
 which is what makes 100,000 variants a matter of seconds.
 """
 
@@ -95,56 +95,98 @@ def _quote(value: object) -> str:
     return json.dumps(value, ensure_ascii=False)
 
 
-def _model_block(text: str) -> str:
-    """``model:`` as a literal block when the text allows it, else as a double-quoted scalar."""
-    body = text.rstrip("\n") + "\n"
-    if _BLOCK_UNSAFE.search(body) is None:
-        return "model: |2\n" + "".join("  " + line + "\n" if line else "\n" for line in body[:-1].split("\n"))
-    return "model: " + _quote(body) + "\n"
+def _indent_chunk(chunk: str, first: bool, last: bool) -> str:
+    """Indent a piece of model text for the literal block (empty lines stay empty).
+
+    A chunk ends where a substituted value begins, so a line break at its very end still starts a
+    non-empty line; in the last chunk the final line break ends the block.
+    """
+    pattern = _LAST_BREAKS if last else _INNER_BREAKS
+    indented = pattern.sub("\n  ", chunk)
+    if first and not chunk.startswith("\n"):
+        indented = "  " + indented
+    return indented
 
 
-class SceWriter:
-    """Makes ``.sce`` texts for the variants of one source file, fast.
+_INNER_BREAKS = re.compile(r"\n(?!\n)")
+_LAST_BREAKS = re.compile(r"\n(?![\n]|\Z)")
 
-    Everything that is the same for all variants (source name, hash, folder, scenario) is quoted once;
-    :meth:`render` only joins strings. ``source_dir`` should already be the form to write (relative to
-    the output folder, see :func:`relative_source_dir`).
+
+class SceTemplate:
+    """Makes the ``.sce`` texts of all variants of one source file, fast.
+
+    The concrete model is ``chunks[0] + slot_0 + chunks[1] + … + chunks[-1]`` where slot ``i`` is
+    ``replacements[i][choice]``. Each dimension (the text ones first, in order, then the optional
+    parameter-document one) has per choice: a key, the value as shown in the header comment, and the
+    value stored in the assignment. Everything is quoted and indented once here; :meth:`render`
+    only joins strings, so 100,000 variants cost little more than writing them.
     """
 
-    def __init__(self, source: str, source_sha256: str, source_dir: str, scenario: str) -> None:
+    def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
+                 chunks: list[str], replacements: list[list[str]], keys: list[str],
+                 shown: list[list[str]], stored: list[list[object]],
+                 documents: list[Mapping[str, object]] | None = None) -> None:
+        model = "".join(chunks)
+        self._block = _BLOCK_UNSAFE.search(model) is None and all(
+            _BLOCK_UNSAFE.search(r) is None and "\n" not in r for slot in replacements for r in slot)
+        last = len(chunks) - 1
+        if self._block:
+            self._chunks = [_indent_chunk(c, i == 0, i == last) for i, c in enumerate(chunks)]
+        else:
+            self._chunks = list(chunks)
+        self._replacements = replacements
+        self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
+        self._of = f" of {_one_line(Path(source).name)}\n"
         self._head = (
             f"format_version: {SCE_FORMAT_VERSION}\n"
             f"source: {_quote(source)}\n"
             f"source_sha256: {_quote(source_sha256)}\n"
             f"source_dir: {_quote(source_dir)}\n"
             f"scenario: {_quote(scenario)}\n"
+            "index: "
         )
-        self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
-        self._of = f" of {_one_line(Path(source).name)}\n"
+        self._comments = [[f"# {key} = {_one_line(text)}\n" for text in texts] for key, texts in zip(keys, shown, strict=True)]
+        self._entries = [[f"  {_quote(key)}: {_quote(value)}\n" for value in values]
+                         for key, values in zip(keys, stored, strict=True)]
+        self._documents = None if documents is None else [f"parameters: {_quote(d)}\n" for d in documents]
+        self.text_dimensions = len(replacements)
 
-    def render(self, index: int, assignment: Mapping[str, object], shown: Mapping[str, str],
-               model_text: str, parameters: Mapping[str, object] | None = None) -> str:
-        """The ``.sce`` text of variant ``index``.
+    def model_text(self, choices: tuple[int, ...] | list[int]) -> str:
+        """The concrete ``.osc`` text for ``choices`` (not indented)."""
+        if self._block:
+            raise RuntimeError("model_text() is for the variation template, not the indented one")
+        return _join(self._chunks, self._replacements, choices)
 
-        ``assignment`` maps ``scenario.path`` to the value stored (JSON-able); ``shown`` maps the same
-        keys to the value as written in the source (for the header comments); ``model_text`` is the
-        concrete ``.osc`` text; ``parameters`` the parameter document used, if any.
-        """
+    def render(self, index: int, choices: tuple[int, ...] | list[int]) -> str:
+        """The ``.sce`` text of variant ``index`` made of ``choices`` (one choice index per dimension)."""
         parts = [self._magic, str(index), self._of]
-        for key, text in shown.items():
-            parts.append(f"# {key} = {_one_line(text)}\n")
-        parts.append(self._head)
-        parts.append(f"index: {index}\n")
-        if assignment:
+        for comments, choice in zip(self._comments, choices, strict=True):
+            parts.append(comments[choice])
+        parts += [self._head, str(index), "\n"]
+        if self._entries:
             parts.append("assignment:\n")
-            for key, value in assignment.items():
-                parts.append(f"  {_quote(key)}: {_quote(value)}\n")
+            for entries, choice in zip(self._entries, choices, strict=True):
+                parts.append(entries[choice])
         else:
             parts.append("assignment: {}\n")
-        if parameters is not None:
-            parts.append(f"parameters: {_quote(parameters)}\n")
-        parts.append(_model_block(model_text))
+        if self._documents is not None:
+            parts.append(self._documents[choices[-1]])
+        model = _join(self._chunks, self._replacements, choices)
+        if self._block:
+            parts += ["model: |2\n", model]
+        else:
+            parts += ["model: ", _quote(model.rstrip("\n") + "\n"), "\n"]
         return "".join(parts)
+
+
+def _join(chunks: list[str], replacements: list[list[str]], choices) -> str:
+    if not replacements:
+        return chunks[0]
+    parts = [chunks[0]]
+    for i, slot in enumerate(replacements):
+        parts.append(slot[choices[i]])
+        parts.append(chunks[i + 1])
+    return "".join(parts)
 
 
 def _one_line(text: str) -> str:
@@ -164,9 +206,18 @@ def relative_source_dir(source_dir: str | os.PathLike, output_dir: str | os.Path
 def render_sce(source: str, source_sha256: str, source_dir: str, scenario: str, index: int,
                assignment: Mapping[str, object], shown: Mapping[str, str], model_text: str,
                parameters: Mapping[str, object] | None = None) -> str:
-    """One ``.sce`` text (convenience wrapper of :class:`SceWriter` for single files and tests)."""
-    return SceWriter(source, source_sha256, source_dir, scenario).render(
-        index, assignment, shown, model_text, parameters)
+    """One ``.sce`` text (for single files and tests; the generator uses :class:`SceTemplate`)."""
+    keys = list(assignment)
+    values = dict(assignment)
+    if parameters is not None:
+        keys.append("parameter_document")
+        values["parameter_document"] = 0
+    template = SceTemplate(
+        source=source, source_sha256=source_sha256, source_dir=source_dir, scenario=scenario,
+        chunks=[model_text.rstrip("\n") + "\n"], replacements=[], keys=keys,
+        shown=[[shown.get(k, str(values[k]))] for k in keys], stored=[[values[k]] for k in keys],
+        documents=None if parameters is None else [parameters])
+    return template.render(index, [0] * len(keys))
 
 
 def is_sce_text(head: str) -> bool:

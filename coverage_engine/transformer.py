@@ -7,7 +7,7 @@ rejected here with :class:`UnsupportedFeatureError` at their position.
 
 from __future__ import annotations
 
-from lark import Token, Transformer, v_args
+from lark import Token, v_args
 
 from coverage_engine import syntax as s
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
@@ -31,7 +31,7 @@ UNSUPPORTED_EXPR_CALLS = {
 
 
 @v_args(meta=True)
-class SyntaxBuilder(BehaviorExpressionRules, Transformer):
+class SyntaxBuilder(BehaviorExpressionRules):
     """Builds syntax nodes; ``file`` names the source in every :class:`~coverage_engine.syntax.Location`."""
 
     UNSUPPORTED_EXPR_CALLS = UNSUPPORTED_EXPR_CALLS
@@ -106,7 +106,7 @@ class SyntaxBuilder(BehaviorExpressionRules, Transformer):
         return s.PhysicalTypeDecl(self.name(name), tuple(exps), self.loc(meta))
 
     def unit_decl(self, meta, children):
-        name, of, type_name, args = children
+        name, type_name, args = children
         exps, factor, offset = [], None, None
         for arg_name, value, loc in args:
             if arg_name == "factor":

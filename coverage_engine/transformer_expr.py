@@ -7,14 +7,15 @@ every other unary minus stays a :class:`UnaryOp`.
 
 from __future__ import annotations
 
-from lark import Token
+from lark import Token, Transformer, v_args
 
 from coverage_engine import syntax as s
 from coverage_engine.errors import OscSyntaxError
 from coverage_engine.strings import unescape_string
 
 
-class BehaviorExpressionRules:
+@v_args(meta=True)
+class BehaviorExpressionRules(Transformer):
     """Rules for behaviours and expressions; relies on the helpers of ``SyntaxBuilder``."""
 
     # ------------------------------------------------------------------ behaviours
@@ -60,7 +61,7 @@ class BehaviorExpressionRules:
         return ("event conditions (if ...)", self.loc(meta))
 
     def event_ref(self, meta, children):
-        return s.EventRef(children[0].parts, self.loc(meta))
+        return s.EventRef((self.name(children[0]),), self.loc(meta))
 
     def emit(self, meta, children):
         _, name, *arguments = children
@@ -125,6 +126,8 @@ class BehaviorExpressionRules:
 
     def member(self, meta, children):
         target, name = children
+        if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
+            return s.EventRef(target.path + (self.name(name),), self.loc(meta))
         return s.MemberAccess(target, self.name(name), self.loc(meta))
 
     def call_expr(self, meta, children):

@@ -13,10 +13,10 @@ from coverage_engine.model import EnumValue
 
 
 class OscType:
-    """Base of every type; ``name`` as users write it."""
+    """Base of every type; ``name`` as users write it, ``kind`` what sort of type it is."""
 
-    name: str = "?"
-    kind: str = "?"
+    name: str
+    kind: str
 
     def __str__(self) -> str:
         return self.name

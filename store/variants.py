@@ -95,11 +95,14 @@ BATCH_SIZE = 2000
 
 @dataclass(frozen=True)
 class VariantRecord:
-    """One variant to record: its index, scenario, assignment, ``.sce`` text and where it was written."""
+    """One variant to record: its index, scenario, assignment, ``.sce`` text and where it was written.
+
+    ``assignment`` may be given already as JSON text (as :func:`assignment_json` makes it).
+    """
 
     index: int
     scenario: str
-    assignment: Mapping[str, object]
+    assignment: Mapping[str, object] | str
     sce_text: str
     file_path: str | None = None
     content_hash: str | None = None
@@ -189,7 +192,9 @@ def record_variation(engine: Engine, *, source_path: str, source_sha256: str, so
                 for record in records:
                     yield {
                         "source_id": source_id, "run_id": run_id, "scenario": record.scenario,
-                        "idx": record.index, "assignment": assignment_json(record.assignment),
+                        "idx": record.index,
+                        "assignment": record.assignment if isinstance(record.assignment, str)
+                        else assignment_json(record.assignment),
                         "sce_text": record.sce_text,
                         "content_hash": record.content_hash or content_hash(record.sce_text),
                         "file_path": record.file_path, "output_dir": output_dir,

@@ -151,12 +151,19 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
                      start=expr.location.start_pos, end=expr.location.end_pos, location=keep.location)
 
 
-def _invocations(behavior: s.Behavior | s.ModifierInvocation) -> Iterator[s.Invocation]:
-    if isinstance(behavior, s.Invocation):
-        yield behavior
-    elif isinstance(behavior, s.Composite):
-        for member in behavior.members:
-            yield from _invocations(member)
+def _invocations(node: object) -> Iterator[s.Invocation]:
+    """Every invocation under a behaviour, in no particular order (callers sort by position).
+
+    Walks all fields of composites rather than only ``members``, so the finder does not depend on
+    which field the parser files a child under.
+    """
+    if isinstance(node, s.Invocation):
+        yield node
+    elif isinstance(node, s.Composite):
+        for name in ("members", "arguments", "with_members"):
+            value = getattr(node, name)
+            for child in value if isinstance(value, tuple) else (value,):
+                yield from _invocations(child)
 
 
 def _keeps(members) -> Iterator[s.KeepConstraint]:
@@ -175,7 +182,7 @@ def _scenario_dimensions(decl: s.TypeDecl, text: str) -> Iterator[Dimension]:
         elif isinstance(member, s.KeepConstraint):
             found.append(_keep_dimension(member, text, scenario, [], None))
         elif isinstance(member, s.DoDirective):
-            invocations = list(_invocations(member.behavior))
+            invocations = sorted(_invocations(member.behavior), key=lambda inv: inv.location.start_pos)
             names = Counter(inv.name.dotted for inv in invocations if inv.label is None)
             seen: Counter = Counter()
             for inv in invocations:
@@ -206,7 +213,7 @@ def _check_disjoint(dimensions: list[Dimension]) -> None:
     """Nested lists (a keep inside a value of another) cannot be cut apart: refuse them clearly."""
     from coverage_engine.errors import UnsupportedFeatureError
 
-    for before, after in zip(dimensions, dimensions[1:]):
+    for before, after in zip(dimensions, dimensions[1:], strict=False):
         if after.start < before.end:
             raise UnsupportedFeatureError("a varied constraint inside another varied constraint cannot be "
                                           "expanded", after.location)

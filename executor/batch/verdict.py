@@ -12,7 +12,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from executor.batch.junit_read import JunitUnreadable, clean_text, has_problem, read_cases
+from executor.batch.junit_read import CaseRecord, JunitUnreadable, clean_text, has_problem, read_cases
 from executor.batch.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState
@@ -55,30 +55,30 @@ def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
     return clean_text(text)
 
 
-def read_result(path: Path, mark: FileMark) -> tuple[str | None, str | None]:
-    """The test.xml text the attempt wrote (None if none) and why it cannot be used (None if it can)."""
+def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[CaseRecord], str | None]:
+    """The test.xml the attempt wrote (text or None, its testcases) and why it cannot be used (None if it can)."""
     if not mark.changed(path):
-        return None, "no test.xml written"
+        return None, [], "no test.xml written"
     try:
         size = path.stat().st_size
         if size > JUNIT_MAX_BYTES:
-            return None, f"test.xml is {size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
+            return None, [], f"test.xml is {size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
         text = path.read_bytes().decode("utf-8", errors="replace")
     except OSError as exc:
-        return None, f"cannot read test.xml: {exc.strerror}"
+        return None, [], f"cannot read test.xml: {exc.strerror}"
     try:
         cases = read_cases(text)
     except JunitUnreadable as exc:
-        return clean_text(text), str(exc)
+        return clean_text(text), [], str(exc)
     if not cases:
-        return clean_text(text), "test.xml holds no testcase"
-    return clean_text(text), None
+        return clean_text(text), [], "test.xml holds no testcase"
+    return clean_text(text), cases, None
 
 
 def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_return_value: bool = False,
           timeout: float | None = None) -> JobResult:
     """The result of one attempt, ready to be written to the store."""
-    xml_text, unreadable = read_result(output_dir / RESULT_FILE, mark)
+    xml_text, cases, unreadable = read_result(output_dir / RESULT_FILE, mark)
     rc = outcome.returncode
     if outcome.cancelled:
         status, reason = JobState.CANCELLED, "cancelled"
@@ -88,7 +88,7 @@ def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_r
         status = JobState.ERROR
         ended = f"killed by {outcome.signal_name}" if outcome.signal_name else f"exit code {rc}"
         reason = f"{unreadable} ({ended})"
-    elif has_problem(read_cases(xml_text or "")):
+    elif has_problem(cases):
         status, reason = JobState.FAILED, "test.xml reports a failure"
     elif outcome.signal_name and not ignore_return_value:
         status, reason = JobState.ERROR, f"killed by {outcome.signal_name}"

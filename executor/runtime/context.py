@@ -25,7 +25,8 @@ class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an erro
         self.message = message
 
 
-class Aborted(Exception):  # noqa: N818 - raised by the signal handler
+class Aborted(BaseException):  # noqa: N818 - raised by the signal handler; not an Exception,
+    # so no ``except Exception`` in an action can swallow it
     """SIGINT/SIGTERM arrived: the running scenario is recorded as failed and nothing else runs."""
 
     def __init__(self, signum: int) -> None:

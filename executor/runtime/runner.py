@@ -129,55 +129,45 @@ class ScenarioRunner:
     # -- the whole run -----------------------------------------------------------------------------
 
     def run(self) -> ScenarioResult:
-        """Run to the end; never raises except for :class:`Aborted` after recording it."""
+        """Run to the end and return the result; raises :class:`RunAborted` (result inside) on a signal."""
         logger = self.context.logger
         logger.info(f"Executing scenario '{self.name}'")
-        start_wall = time.time()
         start = time.monotonic()
-        result = ScenarioResult(self.name, False, start_time=start_wall, output_dir=self.context.output_dir)
-        aborted: Aborted | None = None
+        result = ScenarioResult(self.name, False, start_time=time.time(), output_dir=self.context.output_dir)
+        signum = 0
+        ticking = False
         try:
-            try:
-                self._setup()
-            except Exception as exc:  # noqa: BLE001
-                result.message = f"setup failed: {describe_error(exc)}"
-                raise _Done from exc
-            try:
-                status = self._tick_loop()
-                result.passed = status is Status.SUCCESS
-                if not result.passed:
-                    result.message = "the scenario's behaviour failed"
-            except ScenarioEnd as end:
-                result.passed = end.success
-                result.message = "" if end.success else end.message
-            except (Aborted, KeyboardInterrupt) as exc:
-                aborted = exc if isinstance(exc, Aborted) else Aborted(2)
-                result.message = "aborted"
-                result.aborted = True
-            except Exception as exc:  # noqa: BLE001 - anything raised by actions or expressions
-                result.message = describe_error(exc)
-                if logger.debug_enabled:
-                    import traceback
+            self._setup()
+            ticking = True
+            status = self._tick_loop()
+            result.passed = status is Status.SUCCESS
+            if not result.passed:
+                result.message = "the scenario's behaviour tree failed"
+        except ScenarioEnd as end:
+            result.passed = end.success
+            result.message = "" if end.success else end.message
+        except (Aborted, KeyboardInterrupt) as exc:
+            signum = exc.signum if isinstance(exc, Aborted) else 2
+            result.message = "aborted"
+            result.aborted = True
+        except Exception as exc:  # noqa: BLE001 - anything raised by actions, expressions or plugins
+            result.message = describe_error(exc) if ticking else f"setup failed: {describe_error(exc)}"
+            if logger.debug_enabled:
+                import traceback
 
-                    logger.debug(traceback.format_exc())
-            if not result.passed and self.root is not None:
-                result.output = snapshot(self.root)
-        except _Done:
-            pass
+                logger.debug(traceback.format_exc())
         finally:
+            if not result.passed and self.root is not None and ticking:
+                result.output = snapshot(self.root)
             self._teardown()
         result.duration = time.monotonic() - start
         if result.passed:
             logger.info(f"Scenario '{self.name}' succeeded.")
         else:
             logger.error(f"Scenario '{self.name}' failed: {result.message}")
-        if aborted is not None:
-            raise RunAborted(result, aborted.signum)
+        if signum:
+            raise RunAborted(result, signum)
         return result
-
-
-class _Done(Exception):  # noqa: N818 - internal control flow
-    pass
 
 
 class RunAborted(Exception):  # noqa: N818 - carries the recorded result out of the loop

@@ -1,0 +1,318 @@
+"""Plan a variation: find the dimensions, check every value once, then stream the valid combinations.
+
+Why not resolve every combination? 100,000 variants would mean 100,000 resolutions. Instead each
+dimension is a *slot* that only its own keep fills, so a value is checked once, in its slot, with
+every other slot at a value known to be good:
+
+1. **Baseline**: resolve the text with every slot at its first value (the *reference*). If that fails
+   and the error's line lies inside one of the varied constraints, that slot's reference value is
+   marked bad and the next value becomes the reference; if the line says nothing, each slot in turn
+   is moved to another value until the baseline resolves. If nothing helps, the file itself is wrong:
+   the error is raised and nothing is generated.
+2. **Values**: for each slot, each other value is resolved once, all other slots at their reference.
+   A value that fails makes every combination containing it fail; it is recorded with its error.
+3. **Product**: combinations are produced with :func:`itertools.product` in source order (the first
+   keep varies slowest, the parameter documents fastest); those containing a bad value are reported
+   as skipped, the rest are valid. Nothing is held per combination, so memory is flat.
+
+That is ``1 + Σ (values - 1)`` resolutions instead of ``Π values``. Several keeps on the *same*
+parameter (same invocation or scenario member) can contradict each other, so they share one slot
+whose values are their joint product. The documents of a ``--scenario-parameter-file`` form one
+more slot (its choice is the overrides passed to the resolver). See ``docs/variation.md``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from coverage_engine import syntax
+from coverage_engine.errors import OscError
+from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
+from coverage_engine.variation.template import TextTemplate
+
+#: ``(concrete text, overrides) -> resolved model``; raises :class:`OscError` when it does not resolve.
+Resolve = Callable[[str, "Mapping | None"], object]
+
+#: Assignment key of the parameter-document dimension.
+DOCUMENT_KEY = "parameter_document"
+
+
+@dataclass(frozen=True)
+class Slot:
+    """Dimensions checked together (``dims``: indices into the plan's axes) and their joint options."""
+
+    dims: tuple[int, ...]
+    sizes: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        return math.prod(self.sizes)
+
+    def option(self, choices: Sequence[int]) -> int:
+        """The option number of the slot's dims' choices (mixed radix, first dim slowest)."""
+        number = 0
+        for dim, size in zip(self.dims, self.sizes, strict=True):
+            number = number * size + choices[dim]
+        return number
+
+    def choices(self, option: int) -> dict[int, int]:
+        """Dim index → choice index for option number ``option``."""
+        out = {}
+        for dim, size in zip(reversed(self.dims), reversed(self.sizes), strict=True):
+            option, out[dim] = divmod(option, size)
+        return out
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """A value (or joint values of one slot) that does not resolve, with the error and where it was written."""
+
+    slot: Slot
+    option: int
+    error: OscError
+    shown: dict[str, str]
+    location: syntax.Location | None
+    skipped: int = 0
+
+
+@dataclass
+class VariationPlan:
+    """Everything needed to generate: axes (dimensions, then documents), template, checked values."""
+
+    path: Path
+    text: str
+    unit: syntax.CompilationUnit
+    dimensions: list[Dimension]
+    documents: list[dict] | None
+    template: TextTemplate
+    slots: list[Slot]
+    scenario: str
+    resolutions: int = 0
+    rejections: list[Rejection] = field(default_factory=list)
+    _bad: list[set[int]] = field(default_factory=list)
+
+    # -- axes ---------------------------------------------------------------------------------------
+
+    @property
+    def sizes(self) -> list[int]:
+        """Number of choices per axis (each dimension, then the document axis if any)."""
+        sizes = [len(d.choices) for d in self.dimensions]
+        if self.documents is not None:
+            sizes.append(len(self.documents))
+        return sizes
+
+    @property
+    def keys(self) -> list[str]:
+        keys = [d.key for d in self.dimensions]
+        if self.documents is not None:
+            keys.append(DOCUMENT_KEY)
+        return keys
+
+    def shown(self) -> list[list[str]]:
+        """Per axis, each choice as shown in headers (source text; document number)."""
+        shown = [[c.text for c in d.choices] for d in self.dimensions]
+        if self.documents is not None:
+            shown.append([str(i) for i in range(len(self.documents))])
+        return shown
+
+    def stored(self) -> list[list[object]]:
+        """Per axis, each choice as stored in assignments."""
+        stored = [[c.stored for c in d.choices] for d in self.dimensions]
+        if self.documents is not None:
+            stored.append(list(range(len(self.documents))))
+        return stored
+
+    @property
+    def total(self) -> int:
+        """Number of combinations (valid and skipped)."""
+        return math.prod(self.sizes)
+
+    def assignment(self, choices: Sequence[int]) -> dict[str, object]:
+        return {key: values[c] for key, values, c in zip(self.keys, self.stored(), choices, strict=True)}
+
+    def shown_assignment(self, choices: Sequence[int]) -> dict[str, str]:
+        return {key: values[c] for key, values, c in zip(self.keys, self.shown(), choices, strict=True)}
+
+    def overrides(self, choices: Sequence[int]) -> dict | None:
+        return None if self.documents is None else self.documents[choices[-1]]
+
+    def concrete_text(self, choices: Sequence[int]) -> str:
+        """The concrete ``.osc`` text of a combination (line numbers as in the source)."""
+        return self.template.render(choices)
+
+    # -- combinations -------------------------------------------------------------------------------
+
+    def combinations(self) -> Iterator[tuple[int, tuple[int, ...], Rejection | None]]:
+        """``(index, choices, rejection)`` for every combination in generation order.
+
+        ``rejection`` is None for a valid combination, else the first bad value it contains.
+        """
+        checks = [(slot, self._bad[i], self._rejection_of(i)) for i, slot in enumerate(self.slots) if self._bad[i]]
+        product = itertools.product(*(range(n) for n in self.sizes))
+        if not checks:
+            for index, choices in enumerate(product):
+                yield index, choices, None
+            return
+        for index, choices in enumerate(product):
+            rejection = None
+            for slot, bad, reasons in checks:
+                option = slot.option(choices)
+                if option in bad:
+                    rejection = reasons[option]
+                    break
+            yield index, choices, rejection
+
+    def valid_count(self) -> int:
+        """Number of combinations without a bad value (computed, not counted)."""
+        return math.prod(slot.count - len(bad) for slot, bad in zip(self.slots, self._bad, strict=True))
+
+    def _rejection_of(self, slot_index: int) -> dict[int, Rejection]:
+        return {r.option: r for r in self.rejections if r.slot is self.slots[slot_index]}
+
+
+def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
+    """Group dimensions on the same target into one slot; the documents are a slot of their own."""
+    groups: dict[tuple, list[int]] = {}
+    for i, dim in enumerate(dimensions):
+        groups.setdefault(dim.target, []).append(i)
+    slots = [Slot(tuple(ids), tuple(len(dimensions[i].choices) for i in ids)) for ids in groups.values()]
+    if documents is not None:
+        slots.append(Slot((len(dimensions),), (len(documents),)))
+    return slots
+
+
+def default_resolver(path: Path) -> Resolve:
+    """Parse and resolve concrete texts of ``path`` (imports relative to its folder)."""
+    from coverage_engine.parser import parse_text
+    from coverage_engine.resolver import resolve
+
+    file, base = str(path), path.parent
+
+    def run(text: str, overrides: Mapping | None) -> object:
+        return resolve(parse_text(text, file), base_dir=base, overrides=overrides)
+
+    return run
+
+
+def plan_variation(path: str | Path, documents: list[dict] | None = None, *,
+                   resolver: Resolve | None = None, text: str | None = None) -> VariationPlan:
+    """Parse ``path``, find its dimensions and check each value (see the module docstring).
+
+    ``documents`` are the documents of a scenario parameter file (None: no file). Raises
+    :class:`OscError` when the file cannot be parsed or does not resolve whatever the values.
+    """
+    from coverage_engine.parser import parse_text
+
+    path = Path(path)
+    if text is None:
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise OscError(f"{path}: no such file") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise OscError(f"{path}: cannot read: {exc}") from exc
+    unit = parse_text(text, str(path))
+    dimensions = find_dimensions(unit, text)
+    names = scenario_names(unit)
+    varied = [d.scenario for d in dimensions]
+    scenario = varied[0] if varied else (names[0] if names else "")
+    plan = VariationPlan(path=path, text=text, unit=unit, dimensions=dimensions,
+                         documents=None if documents is None else list(documents),
+                         template=TextTemplate.build(text, dimensions),
+                         slots=_slots(dimensions, documents), scenario=scenario)
+    _check(plan, resolver or default_resolver(path))
+    return plan
+
+
+def _check(plan: VariationPlan, resolver: Resolve) -> None:
+    """Steps 1 and 2 of the module docstring: find good reference values, then check all others."""
+    slots = plan.slots
+    plan._bad = [set() for _ in slots]
+    errors: list[dict[int, OscError]] = [{} for _ in slots]
+
+    def attempt(options: list[int]) -> OscError | None:
+        choices = [0] * len(plan.sizes)
+        for slot, option in zip(slots, options, strict=True):
+            for dim, choice in slot.choices(option).items():
+                choices[dim] = choice
+        plan.resolutions += 1
+        try:
+            resolver(plan.concrete_text(choices), plan.overrides(choices))
+        except OscError as exc:
+            return exc
+        return None
+
+    def next_good(s: int, after: int) -> int | None:
+        return next((o for o in range(after + 1, slots[s].count) if o not in errors[s]), None)
+
+    reference = [0] * len(slots)
+    while (error := attempt(reference)) is not None:
+        culprit = _attribute(plan, error)
+        if culprit is None:
+            culprit = _search(slots, reference, errors, attempt)
+            if culprit is None:
+                raise error
+        errors[culprit][reference[culprit]] = error
+        following = next_good(culprit, reference[culprit])
+        if following is None:  # every value of this slot fails: every combination does
+            break
+        reference[culprit] = following
+    else:
+        for s, slot in enumerate(slots):
+            for option in range(slot.count):
+                if option != reference[s] and option not in errors[s]:
+                    trial = list(reference)
+                    trial[s] = option
+                    if (error := attempt(trial)) is not None:
+                        errors[s][option] = error
+    _record(plan, errors)
+
+
+def _attribute(plan: VariationPlan, error: OscError) -> int | None:
+    """The slot whose varied constraint holds the error's line, if any."""
+    loc = error.location
+    if loc is None or loc.file != str(plan.path):
+        return None
+    for s, slot in enumerate(plan.slots):
+        for dim in slot.dims:
+            if dim < len(plan.dimensions):
+                where = plan.dimensions[dim].location
+                if where.line <= loc.line <= max(where.end_line, where.line):
+                    return s
+    return None
+
+
+def _search(slots: list[Slot], reference: list[int], errors: list[dict[int, OscError]],
+            attempt: Callable[[list[int]], OscError | None]) -> int | None:
+    """Move one slot at a time to another value; the slot whose move makes it resolve is the culprit."""
+    for s, slot in enumerate(slots):
+        for option in range(slot.count):
+            if option == reference[s] or option in errors[s]:
+                continue
+            trial = list(reference)
+            trial[s] = option
+            if attempt(trial) is None:
+                return s
+    return None
+
+
+def _record(plan: VariationPlan, errors: list[dict[int, OscError]]) -> None:
+    plan._bad = [set(e) for e in errors]
+    shown = plan.shown()
+    for s, slot in enumerate(plan.slots):
+        others = math.prod(o.count for i, o in enumerate(plan.slots) if i != s)
+        for option, error in sorted(errors[s].items()):
+            choices = slot.choices(option)
+            keys = plan.keys
+            location = None
+            first = min(choices)
+            if first < len(plan.dimensions):
+                location = plan.dimensions[first].choices[choices[first]].location
+            plan.rejections.append(Rejection(
+                slot=slot, option=option, error=error,
+                shown={keys[d]: shown[d][c] for d, c in sorted(choices.items())},
+                location=location, skipped=others))

@@ -1,0 +1,113 @@
+"""One attempt of one job, run in its own thread: prepare the folder, start the child, wait, judge.
+
+The thread never touches the store; it reports ``Started`` and ``Done`` events to the worker loop,
+which writes them. Earlier attempts' logs are kept: before attempt n the previous ``log.txt`` becomes
+``log.<n-1>.txt``.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import BinaryIO
+
+from executor.batch.hooks import run_post_hooks
+from executor.batch.inputs import substitute
+from executor.batch.process import ChildProcess
+from executor.batch.verdict import LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
+from store.jobs import Batch, Job, JobResult
+from store.states import JobState
+
+
+@dataclass
+class Started:
+    """The child of ``run`` is running with this process id (also its process group id)."""
+
+    run: JobRun
+    pid: int
+
+
+@dataclass
+class Done:
+    """The attempt ended; ``result`` is what to record, ``problems`` the post-run hooks that failed."""
+
+    run: JobRun
+    result: JobResult
+    problems: list[str] = field(default_factory=list)
+
+
+def rotate_log(output_dir: Path, attempt: int) -> None:
+    """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts."""
+    log = output_dir / LOG_FILE
+    if attempt > 1 and log.exists():
+        log.replace(output_dir / f"log.{attempt - 1}.txt")
+
+
+class JobRun:
+    """Run one claimed job in a thread; ``cancel`` stops it (from the worker loop's thread)."""
+
+    def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
+                 events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None) -> None:
+        self.job = job
+        self.batch = batch
+        self.output_dir = output_dir
+        self.scenario_path = scenario_path
+        self.events = events
+        self.cwd = cwd
+        self.echo = echo
+        self.lost = False                     # set when the lease was taken over: the result is dropped
+        self._child: ChildProcess | None = None
+        self._lock = threading.Lock()
+        self._cancel_grace: float | None = None
+        self._thread = threading.Thread(target=self._main, name=f"job-{job.name}", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def join(self, timeout: float | None = None) -> None:
+        self._thread.join(timeout)
+
+    def cancel(self, grace: float | None = None) -> None:
+        """Interrupt the child (SIGINT, SIGKILL after ``grace``); an attempt not started yet never starts."""
+        with self._lock:
+            self._cancel_grace = self.batch.options.grace if grace is None else grace
+            child = self._child
+        if child is not None:
+            child.cancel(self._cancel_grace)
+
+    def _main(self) -> None:
+        started = time.time()
+        problems: list[str] = []
+        try:
+            result = self._attempt(problems)
+        except OSError as exc:
+            result = launch_failure(self.output_dir, started, time.time(),
+                                    f"cannot start the launch command: {exc.strerror or exc}")
+        except Exception as exc:  # noqa: BLE001 - an attempt must always end with a result
+            result = launch_failure(self.output_dir, started, time.time(), f"internal error: {exc!r}")
+        self.events.put(Done(self, result, problems))
+
+    def _attempt(self, problems: list[str]) -> JobResult:
+        options = self.batch.options
+        self.output_dir.mkdir(parents=True, exist_ok=True)
+        rotate_log(self.output_dir, self.job.attempts)
+        mark = FileMark.of(self.output_dir / RESULT_FILE)
+        argv = substitute(self.batch.command, self.scenario_path, str(self.output_dir))
+        child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
+                             grace=options.grace, echo=self.echo)
+        with self._lock:
+            if self._cancel_grace is not None:
+                now = time.time()
+                return JobResult(JobState.CANCELLED, None, now, now, reason="cancelled before it started",
+                                 output_dir=str(self.output_dir))
+            pid = child.start()
+            self._child = child
+        self.events.put(Started(self, pid))
+        outcome = child.wait()
+        if options.post_run and not outcome.cancelled:
+            problems.extend(run_post_hooks(options.post_run, self.output_dir, cwd=self.cwd))
+        return judge(outcome, self.output_dir, mark, ignore_return_value=options.ignore_return_value,
+                     timeout=options.timeout)

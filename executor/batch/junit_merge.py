@@ -1,0 +1,138 @@
+"""The merged JUnit report of a batch: one testsuite per job, written with junit-xml.
+
+Each suite is named after the job's file and holds the child's testcases. A child that reported one
+testcase has it named after the job (so the variants of one scenario stay apart in CI), the original
+name kept in the suite's ``testcase`` property; several testcases keep their names. A job without a
+readable report becomes one testcase with an ``error`` carrying the exit code and the end of its log;
+a timeout is an error of type ``timeout``. Totals are computed by junit-xml from the testcases.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from junit_xml import TestCase, TestSuite, to_xml_report_string
+
+from executor.batch.junit_read import CaseRecord, JunitUnreadable, has_problem, read_cases
+from store.jobs import Job
+from store.states import FINAL, JobState
+
+#: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
+REPORT_LOG_CHARS = 16 * 1024
+
+#: The process's umask, read once at import (reading it means setting it, which is not thread-safe).
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
+#: Above this many characters the report is written without indentation (pretty-printing costs memory).
+_PRETTY_LIMIT = 8 * 1024 * 1024
+
+
+def _case(record: CaseRecord, name: str | None = None) -> TestCase:
+    case = TestCase(name or record.name, classname=record.classname, elapsed_sec=record.time,
+                    stdout=record.stdout, stderr=record.stderr)
+    if record.outcome == "failure":
+        case.add_failure_info(message=record.message, output=record.text, failure_type=record.type)
+    elif record.outcome == "error":
+        case.add_error_info(message=record.message, output=record.text, error_type=record.type)
+    elif record.outcome == "skipped":
+        case.add_skipped_info(message=record.message, output=record.text)
+    return case
+
+
+def _tail(text: str | None) -> str | None:
+    if not text:
+        return None
+    return text[-REPORT_LOG_CHARS:]
+
+
+def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestSuite:
+    """The testsuite of one finished job."""
+    cases: list[CaseRecord] = []
+    if job.junit_xml:
+        try:
+            cases = read_cases(job.junit_xml)
+        except JunitUnreadable:
+            cases = []
+    properties: dict[str, str] = {
+        "scenario_file": job.scenario_path,
+        "status": job.status.value,
+        "attempts": str(job.attempts),
+        "exit_code": "" if job.exit_code is None else str(job.exit_code),
+    }
+    if job.reason:
+        properties["reason"] = job.reason
+    if job.worker_host:
+        properties["host"] = job.worker_host
+    if job.output_dir:
+        properties["output_dir"] = job.output_dir
+    for key, value in sorted((assignment or {}).items()):
+        properties[f"variation.{key}"] = str(value)
+
+    exit_text = "no exit code" if job.exit_code is None else f"exit code {job.exit_code}"
+    message = job.reason or job.status.value
+    if "exit code" not in message and "killed by" not in message:
+        message += f" ({exit_text})"
+    kind = "timeout" if job.status is JobState.TIMEOUT else "error"
+    test_cases: list[TestCase] = []
+    if not cases:
+        case = TestCase(job.name, classname=job.name, elapsed_sec=job.duration)
+        if job.status is JobState.PASSED:
+            pass
+        elif job.status is JobState.FAILED:
+            case.add_failure_info(message=message, output=_tail(job.log_tail), failure_type="failure")
+        else:
+            case.add_error_info(message=message, output=_tail(job.log_tail), error_type=kind)
+        test_cases.append(case)
+    else:
+        if len(cases) == 1:
+            properties["testcase"] = cases[0].name
+            test_cases.append(_case(cases[0], name=job.name))
+        else:
+            test_cases.extend(_case(c) for c in cases)
+        if job.status in (JobState.ERROR, JobState.TIMEOUT):
+            extra = TestCase(f"{job.name} [{job.status.value}]", classname=job.name, elapsed_sec=None)
+            extra.add_error_info(message=message, output=_tail(job.log_tail), error_type=kind)
+            test_cases.append(extra)
+        elif job.status is JobState.FAILED and not has_problem(cases):
+            extra = TestCase(f"{job.name} [exit code]", classname=job.name, elapsed_sec=None)
+            extra.add_failure_info(message=message, output=_tail(job.log_tail), failure_type="exit-code")
+            test_cases.append(extra)
+    return TestSuite(job.name, test_cases, hostname=job.worker_host, properties=properties,
+                     file=job.scenario_path)
+
+
+def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, object]] | None = None) -> str:
+    """The merged JUnit XML of the jobs that have a verdict (queued, running and cancelled ones are left out)."""
+    assignments = assignments or {}
+    suites = []
+    size = 0
+    for job in jobs:
+        if job.status not in FINAL:
+            continue
+        suites.append(job_suite(job, assignments.get(job.scenario_path)))
+        size += len(job.junit_xml or "") + min(len(job.log_tail or ""), REPORT_LOG_CHARS)
+    return to_xml_report_string(suites, prettyprint=size < _PRETTY_LIMIT)
+
+
+def write_report(path: str | os.PathLike[str], xml_text: str) -> None:
+    """Write the report atomically: the old file is replaced only once the new one is complete."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".test.xml.", dir=target.parent)
+    try:
+        os.fchmod(fd, 0o666 & ~_UMASK)
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(xml_text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

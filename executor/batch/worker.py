@@ -1,0 +1,310 @@
+"""The worker loop: claim jobs, run each in a thread, heartbeat, sweep lost leases, record results.
+
+No SQL here: every database step is a verb of :class:`store.queue.QueueStore`. Only this loop's
+thread talks to the store; job threads report through a queue. Results wait in memory until the
+store accepts them (backing off while it is unreachable), so a finished result is never dropped
+because of a lost connection. The single-host run is this loop scoped to one batch.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import queue
+import threading
+import time
+from collections import Counter, deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import BinaryIO
+
+from executor.batch.job_run import Done, JobRun, Started
+from executor.batch.process import kill_group
+from executor.batch.progress import Reporter
+from store.jobs import Batch, Job, Reclaimed, WorkerIdentity
+from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
+from store.states import RETRYABLE, JobState
+
+#: Longest wait between two looks at flags (Ctrl-C sets a flag; the loop notices within this time).
+_TICK = 0.2
+
+#: After a stop, how long to keep trying to write results to an unreachable store before giving up.
+_GIVE_UP_AFTER_STOP = 30.0
+
+
+@dataclass
+class WorkerSettings:
+    """How a worker runs: parallel slots, which batches, lease length, where outputs go."""
+
+    slots: int = 1
+    batch_id: int | None = None          # only this batch (the single-host run); else any shared batch
+    lease: float = DEFAULT_LEASE
+    poll: float = 0.5                    # seconds between claims while the queue is empty
+    max_lost: int = DEFAULT_MAX_LOST
+    output_root: str | None = None       # put job folders here instead of the batch's output folder
+    wait_for_work: bool = False          # keep waiting for new batches instead of ending when idle
+    echo: BinaryIO | None = None         # copy the children's output here (``-j 1``)
+    cwd: str | None = None
+
+
+@dataclass
+class WorkerSummary:
+    """What a worker did: verdicts it recorded, whether it was stopped, whether there was any work."""
+
+    verdicts: Counter = field(default_factory=Counter)
+    interrupted: bool = False
+    nothing_to_do: bool = False
+
+
+def process_alive(pid: int | None) -> bool:
+    """Whether a process with this id exists on this host and is not a zombie."""
+    if not pid:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as handle:
+            return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):
+        return True
+
+
+class Worker:
+    """Run jobs from the queue until there is no work left (or :meth:`stop` is called)."""
+
+    def __init__(self, store: QueueStore, settings: WorkerSettings, reporter: Reporter,
+                 identity: WorkerIdentity | None = None) -> None:
+        self.store = store
+        self.settings = settings
+        self.reporter = reporter
+        self.identity = identity or WorkerIdentity.current()
+        self.summary = WorkerSummary()
+        self._events: queue.Queue = queue.Queue()
+        self._runs: dict[int, JobRun] = {}
+        self._pending: deque = deque()         # store writes not done yet: Started / Done events
+        self._batches: dict[int, Batch] = {}
+        self._halted: set[int] = set()
+        self._stop = threading.Event()
+        self._force = threading.Event()
+        self._cancelling = False
+        self._claim_more = True
+        self._next_claim = 0.0
+        self._backoff = 0.0
+        self._retry_at = 0.0
+        self._warned_unavailable = False
+        self._started = 0
+
+    # ------------------------------------------------------------------ control
+    def stop(self, force: bool = False) -> None:
+        """Stop claiming and cancel running jobs (safe to call from a signal handler: it only sets flags)."""
+        self._stop.set()
+        if force:
+            self._force.set()
+
+    def run(self) -> WorkerSummary:
+        """The loop; returns when no work is left, or after a stop once every running job has ended."""
+        beat_every = max(0.05, self.settings.lease / 4)
+        next_beat = next_sweep = 0.0
+        stopped_at: float | None = None
+        while True:
+            now = time.monotonic()
+            if now >= self._retry_at:
+                self._flush()
+            if self._stop.is_set():
+                self._cancel_all()
+                stopped_at = stopped_at or now
+                if not self._runs and self._pending and now - stopped_at > _GIVE_UP_AFTER_STOP:
+                    self.reporter.warn(f"{len(self._pending)} result(s) could not be written to the store")
+                    self._pending.clear()
+            if now >= self._retry_at and now >= next_sweep:
+                if self._guard(self._sweep):
+                    next_sweep = now + beat_every
+            if self._runs and now >= self._retry_at and now >= next_beat:
+                if self._guard(self._heartbeat):
+                    next_beat = now + beat_every
+            if self._may_claim(now):
+                self._guard(self._claim)
+            if not self._runs and not self._pending:
+                if self._stop.is_set():
+                    self.summary.interrupted = True
+                    break
+                if time.monotonic() >= self._retry_at and not self._claim_more:
+                    remaining = self._guard(self._remaining)
+                    if remaining == 0 and not self.settings.wait_for_work:
+                        self.summary.nothing_to_do = self._started == 0
+                        break
+            self._wait_for_event()
+        return self.summary
+
+    # ------------------------------------------------------------------ steps
+    def _guard(self, step):
+        """Run a store step; while the store is unreachable, back off (0.5 s doubling to 30 s) and say so once."""
+        try:
+            value = step()
+        except StoreUnavailable as exc:
+            self._backoff = min(30.0, max(0.5, self._backoff * 2))
+            self._retry_at = time.monotonic() + self._backoff
+            if not self._warned_unavailable:
+                self.reporter.warn(f"{exc}; retrying (results are kept until written)")
+                self._warned_unavailable = True
+            return None
+        if self._backoff:
+            self._backoff = 0.0
+            self._warned_unavailable = False
+        return True if value is None else value
+
+    def _may_claim(self, now: float) -> bool:
+        free = self.settings.slots - len(self._runs)
+        if self._stop.is_set() or free <= 0 or now < self._retry_at:
+            return False
+        if self.settings.batch_id is not None and self.settings.batch_id in self._halted:
+            return False
+        return self._claim_more or now >= self._next_claim
+
+    def _claim(self) -> None:
+        free = self.settings.slots - len(self._runs)
+        jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
+                                shared_only=self.settings.batch_id is None, lease=self.settings.lease)
+        self._claim_more = len(jobs) == free
+        if not self._claim_more:
+            self._next_claim = time.monotonic() + self.settings.poll
+        for job in jobs:
+            self._start(job)
+
+    def _batch(self, batch_id: int) -> Batch:
+        if batch_id not in self._batches:
+            self._batches[batch_id] = self.store.batch(batch_id)
+        return self._batches[batch_id]
+
+    def _start(self, job: Job) -> None:
+        batch = self._batch(job.batch_id)
+        root = Path(self.settings.output_root or batch.output_dir)
+        output_dir = root / job.name
+        scenario = self._scenario_file(job, batch, output_dir)
+        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
+                     echo=self.settings.echo if self.settings.slots == 1 else None)
+        self._runs[job.id] = run
+        self._started += 1
+        self.reporter.job_started(job)
+        run.start()
+
+    def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
+        """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""
+        path = job.scenario_path
+        if batch.mode == "local":
+            return path
+        try:
+            if hashlib.sha256(Path(path).read_bytes()).hexdigest() == job.scenario_sha:
+                return path
+        except OSError:
+            pass
+        text = self.store.scenario_text(job.id)
+        if text is None:
+            return path
+        output_dir.mkdir(parents=True, exist_ok=True)
+        copy = output_dir / Path(path).name
+        copy.write_text(text, encoding="utf-8")
+        return str(copy)
+
+    def _heartbeat(self) -> None:
+        held = self.store.heartbeat(self.identity, self.settings.lease)
+        for job_id, run in self._runs.items():
+            if job_id not in held and not run.lost:
+                run.lost = True
+                self.reporter.warn(f"lost the lease on {run.job.name}; stopping it, another worker runs it")
+                run.cancel(grace=0)
+
+    def _sweep(self) -> None:
+        """Take back jobs of dead holders on this host at once, and of any holder whose lease expired."""
+        reclaimed: list[Reclaimed] = []
+        dead = {j.worker_id for j in self.store.running(self.settings.batch_id,
+                                                        shared_only=self.settings.batch_id is None)
+                if j.worker_host == self.identity.host and j.worker_id != self.identity.id
+                and not process_alive(j.worker_pid)}
+        for worker_id in sorted(w for w in dead if w):
+            reclaimed += self.store.reclaim_worker(worker_id, "the runner holding it ended without a result",
+                                                   max_lost=self.settings.max_lost)
+        reclaimed += self.store.reclaim_expired(self.settings.max_lost)
+        for item in reclaimed:
+            if item.child_pid and item.worker_host == self.identity.host and item.worker_id != self.identity.id:
+                kill_group(item.child_pid)     # the orphaned child of a dead runner must not run on
+        if reclaimed:
+            self._claim_more = True
+
+    def _remaining(self) -> int:
+        counts = self.store.counts(self.settings.batch_id, shared_only=self.settings.batch_id is None)
+        return counts[JobState.QUEUED] + counts[JobState.RUNNING]
+
+    def _cancel_all(self) -> None:
+        if self._force.is_set():
+            for run in self._runs.values():
+                run.cancel(grace=0)
+        elif not self._cancelling:
+            self._cancelling = True
+            for run in self._runs.values():
+                run.cancel()
+
+    # ------------------------------------------------------------------ events and writes
+    def _wait_for_event(self) -> None:
+        timeout = _TICK
+        if self._claim_more and not self._stop.is_set() and len(self._runs) < self.settings.slots \
+                and time.monotonic() >= self._retry_at:
+            timeout = 0.0
+        try:
+            event = self._events.get(timeout=timeout) if timeout else self._events.get_nowait()
+        except queue.Empty:
+            return
+        self._pending.append(event)
+        while True:
+            try:
+                self._pending.append(self._events.get_nowait())
+            except queue.Empty:
+                break
+
+    def _flush(self) -> None:
+        while self._pending:
+            if self._guard(lambda: self._write(self._pending[0])) is None:
+                return
+            self._pending.popleft()
+
+    def _write(self, event: Started | Done) -> None:
+        run = event.run
+        if isinstance(event, Started):
+            if not run.lost:
+                self.store.started(run.job, event.pid)
+            return
+        self._runs.pop(run.job.id, None)
+        for problem in event.problems:
+            self.reporter.warn(f"{run.job.name}: {problem}")
+        event.problems = []                    # said once, even if the write below has to be repeated
+        if run.lost:
+            return
+        result, job = event.result, run.job
+        retrying = False
+        try:
+            if result.status is JobState.CANCELLED:
+                self.store.cancel(job, result)
+            elif (result.status in RETRYABLE and job.retried < run.batch.options.retries
+                  and not self._stop.is_set()):
+                self.store.retry(job, result)
+                retrying = self._claim_more = True
+            else:
+                self.store.finish(job, result)
+                self.summary.verdicts[result.status] += 1
+                if result.status is not JobState.PASSED and run.batch.options.halt_on_failure:
+                    self._halt(run.batch)
+        except LeaseLost as exc:
+            self.reporter.warn(f"result of {job.name} refused: {exc}")
+            return
+        self.reporter.job_finished(job, result, retrying=retrying)
+
+    def _halt(self, batch: Batch) -> None:
+        if batch.id not in self._halted:
+            self._halted.add(batch.id)
+            count = self.store.halt(batch.id, "not started: --halt-on-failure after a failed job")
+            if count:
+                self.reporter.warn(f"halting: {count} job(s) not started (--halt-on-failure)")

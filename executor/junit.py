@@ -1,0 +1,64 @@
+"""Write ``test.xml`` (JUnit, via junit-xml): one testcase per executed scenario.
+
+A failed scenario carries its one-line reason as the failure message and the last tree snapshot as
+the failure text. A file that cannot be parsed or resolved is reported as a single failing testcase
+(``parse_error_result``), so CI sees it too. The file is written to a temporary name and moved into
+place, so a reader never sees half a report.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+from executor.runtime.results import ScenarioResult
+
+SUITE_NAME = "scenario_execution"
+CLASSNAME = "tests.scenario"
+RESULT_FILE = "test.xml"
+
+
+def parse_error_result(scenario_file: str, message: str, output: str = "") -> ScenarioResult:
+    """The failing result recorded when ``scenario_file`` could not be loaded."""
+    return ScenarioResult(f"Parsing of {scenario_file}", False, message, output or message)
+
+
+def write_results(directory: str | os.PathLike, results: Sequence[ScenarioResult]) -> Path:
+    """Write ``<directory>/test.xml`` for ``results`` (directory created if needed); returns the path."""
+    from junit_xml import TestCase, TestSuite, to_xml_report_string
+
+    cases = []
+    for result in results:
+        case = TestCase(result.name, classname=CLASSNAME, elapsed_sec=round(result.duration, 6),
+                        timestamp=result.start_time or None)
+        if not result.passed:
+            case.add_failure_info(message=result.message or "failed", output=result.output or result.message)
+        cases.append(case)
+    suite = TestSuite(SUITE_NAME, cases)
+    text = to_xml_report_string([suite], prettyprint=True, encoding="utf-8")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    target = directory / RESULT_FILE
+    handle, temporary = tempfile.mkstemp(prefix=".test.xml.", dir=directory)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def write_grouped(results: Sequence[ScenarioResult], root: str | None, per_scenario: bool) -> list[Path]:
+    """Write the report(s): one combined file in ``root``, or one per scenario output directory."""
+    if not per_scenario:
+        return [write_results(root, results)] if root else []
+    groups: dict[str, list[ScenarioResult]] = {}
+    for result in results:
+        directory = result.output_dir or root
+        if directory:
+            groups.setdefault(directory, []).append(result)
+    return [write_results(directory, group) for directory, group in groups.items()]

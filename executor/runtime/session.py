@@ -1,0 +1,136 @@
+"""Run the planned scenarios of one file in order: clocks, simulation life cycle, signals.
+
+A session owns what spans scenarios: the simulation (``setup`` once, ``reset`` before each scenario
+with its parameters, ``shutdown`` once), the SIGINT/SIGTERM handlers (the running scenario is
+recorded as failed with "aborted", its processes are ended and nothing else runs), and the list of
+results. A failing scenario never stops the following ones.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+from executor.runtime.context import Aborted, ScenarioContext
+from executor.runtime.external_methods import set_directories
+from executor.runtime.logger import Logger
+from executor.runtime.plan import PlannedRun
+from executor.runtime.results import ScenarioResult
+from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments
+
+
+@dataclass
+class SessionOptions:
+    """How to run: tick period (wall clock), simulation, observers (live view), directories."""
+
+    tick_period: float = 0.1
+    simulation: object | None = None
+    input_dir: str | None = None
+    output_root: str | None = None
+    observer_factory: Callable[[str], list] | None = None
+    debug: bool = False
+
+
+@dataclass
+class SessionOutcome:
+    """All recorded results; ``aborted`` is the signal number when a signal ended the session."""
+
+    results: list[ScenarioResult] = field(default_factory=list)
+    aborted: int = 0
+
+    @property
+    def passed(self) -> bool:
+        return not self.aborted and bool(self.results) and all(r.passed for r in self.results)
+
+
+@contextmanager
+def abort_on_signals():
+    """Turn SIGINT/SIGTERM into :class:`Aborted` in the main thread while scenarios run."""
+
+    def handler(signum, _frame):
+        raise Aborted(signum)
+
+    previous = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        try:
+            previous[signum] = signal.signal(signum, handler)
+        except ValueError:  # not the main thread (e.g. embedded use): keep the defaults
+            pass
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger) -> SessionOutcome:
+    """Run every planned scenario and return the results (never raises for a scenario's failure)."""
+    from executor.runtime.runner import RunAborted, ScenarioRunner
+
+    outcome = SessionOutcome()
+    simulation = options.simulation
+    sim_clock = None
+    with abort_on_signals():
+        try:
+            if simulation is not None:
+                sim_clock = SimulationClock(simulation.dt)
+                try:
+                    simulation.setup(logger=logger, output_dir=options.output_root, tick_period=sim_clock.dt)
+                except Exception as exc:  # noqa: BLE001 - user code
+                    message = f"simulation setup failed: {type(exc).__name__}: {exc}"
+                    logger.error(message)
+                    outcome.results.extend(ScenarioResult(r.name, False, message, output_dir=r.output_dir)
+                                           for r in runs)
+                    simulation = None
+                    return outcome
+            for run in runs:
+                if run.output_dir:
+                    os.makedirs(run.output_dir, exist_ok=True)
+                set_directories(options.input_dir, run.output_dir or options.output_root)
+                if simulation is not None:
+                    failure = _reset_simulation(simulation, run)
+                    if failure is not None:
+                        logger.error(f"Scenario '{run.name}' failed: {failure.message}")
+                        outcome.results.append(failure)
+                        continue
+                    sim_clock.reset()
+                context = ScenarioContext(
+                    name=run.name, clock=sim_clock if simulation is not None else WallClock(),
+                    logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
+                    simulation=simulation)
+                observers = options.observer_factory(run.name) if options.observer_factory else []
+                runner = ScenarioRunner(run.scenario, context, name=run.name,
+                                        tick_period=sim_clock.dt if simulation is not None else options.tick_period,
+                                        simulation=simulation, observers=observers)
+                try:
+                    outcome.results.append(runner.run())
+                except RunAborted as aborted:
+                    outcome.results.append(aborted.result)
+                    outcome.aborted = aborted.signum
+                    break
+        except Aborted as exc:  # between scenarios
+            outcome.aborted = exc.signum
+        finally:
+            if simulation is not None:
+                try:
+                    simulation.shutdown()
+                except Exception as exc:  # noqa: BLE001 - user code
+                    logger.error(f"simulation shutdown failed: {type(exc).__name__}: {exc}")
+    return outcome
+
+
+def _reset_simulation(simulation, run: PlannedRun) -> ScenarioResult | None:
+    """Reset the simulation for ``run``; a failed result when that is impossible."""
+    try:
+        kwargs = reset_arguments(simulation, run.scenario.parameter_values(), run.name)
+    except SimulationError as exc:
+        return ScenarioResult(run.name, False, str(exc), output_dir=run.output_dir)
+    try:
+        simulation.reset(**kwargs)
+    except Exception as exc:  # noqa: BLE001 - user code
+        return ScenarioResult(run.name, False, f"simulation reset failed: {type(exc).__name__}: {exc}",
+                              output_dir=run.output_dir)
+    return None

@@ -144,16 +144,17 @@ def _write(plan, options: dict, engine) -> int:
     from store.variants import VariantRecord, record_variation
 
     output_dir = Path(options["output_dir"])
-    old = earlier_generation(output_dir)
+    # Files of the new generation overwrite those of the same name in place (far cheaper than
+    # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
+    old = {p.name: p for p in earlier_generation(output_dir)}
     if old:
-        removed = remove_files(old)
-        _echo(f"replacing {removed} .sce file(s) of an earlier generation in {output_dir}/")
+        _echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
     progress = _Progress(plan.total)
     debug, log_model, verbose = options["debug"], options["log_model"], plan.total <= LIST_FILES_UP_TO
     counts = {"written": 0, "skipped": 0}
 
     def records():
-        for item in generate(plan, output_dir):
+        for item in generate(plan, output_dir, existing=frozenset(old)):
             progress.advance()
             if item.rejection is not None:
                 counts["skipped"] += 1
@@ -162,6 +163,7 @@ def _write(plan, options: dict, engine) -> int:
                     _echo(f"skipped variant {item.index}: {values}", err=True)
                 continue
             counts["written"] += 1
+            old.pop(os.path.basename(item.path), None)
             if verbose or debug:
                 _echo(f"wrote {os.path.relpath(item.path)}")
             if log_model:
@@ -179,6 +181,7 @@ def _write(plan, options: dict, engine) -> int:
         raise StoreUnavailable(f"{exc} (the .sce files written so far are in {output_dir}/)") from exc
     finally:
         progress.close()
+        remove_files(list(old.values()))
     skipped = counts["skipped"]
     if skipped > LIST_SKIPPED_UP_TO and not debug:
         _echo(f"... {skipped - LIST_SKIPPED_UP_TO} more skipped variants (-d lists all)", err=True)

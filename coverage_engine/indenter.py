@@ -1,6 +1,7 @@
 """Indentation post-lexer: turns newline tokens into ``_NL``/``_INDENT``/``_DEDENT`` for the LALR parser.
 
-It subclasses lark's :class:`~lark.indenter.Indenter` but replaces its processing loop for three reasons:
+It plays the part of lark's :class:`~lark.indenter.Indenter` (same attributes and ``process``) without
+importing lark, which the parser avoids at run time (see :mod:`coverage_engine.lalr`), and differs in three ways:
 newline tokens are made zero-width and placed right after the previous real token (so a rule that
 ends with ``_NL`` ends exactly at its last character, which the variation generator relies on when
 it cuts source by offsets); tabs advance to the next multiple of 8 as in the reference lexer; and a
@@ -12,10 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from lark import Token
-from lark.indenter import Indenter
-
 from coverage_engine.errors import OscSyntaxError
+from coverage_engine.lexer import Token
 from coverage_engine.syntax import Location
 
 TAB_WIDTH = 8
@@ -32,7 +31,7 @@ def indentation_width(blanks: str) -> int:
     return width
 
 
-class OscIndenter(Indenter):
+class OscIndenter:
     """Post-lexer for the ``.osc`` grammar; ``file``/``text`` are set by the parser before each parse."""
 
     NL_type = "_NL"
@@ -43,7 +42,6 @@ class OscIndenter(Indenter):
     tab_len = TAB_WIDTH
 
     def __init__(self) -> None:
-        super().__init__()
         self.file = "<string>"
         self.text = ""
 

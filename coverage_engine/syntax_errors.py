@@ -7,10 +7,13 @@ line``, ``')'`` -- not ``_NL``/``RPAR``); the hint comes from lark's ``match_exa
 
 from __future__ import annotations
 
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+import re
 
 from coverage_engine.errors import OscError, OscSyntaxError
+from coverage_engine.lalr import ParseFailure
 from coverage_engine.syntax import Location
+
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 # hint -> snippets that fail in the same parser state as the mistake the hint explains
 HINTS: dict[str, list[str]] = {
@@ -86,20 +89,17 @@ def describe_terminal(name: str) -> str:
     """A terminal of the grammar in user words: ``'('`` for LPAR, ``end of line`` for _NL."""
     if name in _WORDS:
         return _WORDS[name]
-    from coverage_engine.parser import grammar
+    from coverage_engine.lalr import tables
 
-    try:
-        pattern = grammar().get_terminal(name).pattern
-    except KeyError:
-        return name.lower()
-    if pattern.type == "str":
-        return f"'{pattern.value}'"
-    return name.lower().replace("_", " ")
+    word = tables().terminal_words.get(name)
+    return f"'{word}'" if word is not None else name.lower()
 
 
 def _describe_token(token) -> str:
     kind = getattr(token, "type", "")
-    if kind in ("_NL", "_INDENT", "_DEDENT", "$END"):
+    if kind == "_INDENT":
+        return "indentation"
+    if kind in ("_NL", "_DEDENT", "$END"):
         return _WORDS[kind]
     value = str(token)
     if len(value) > 30:
@@ -107,8 +107,14 @@ def _describe_token(token) -> str:
     return f"'{value}'"
 
 
+def _is_terminal(name: str) -> bool:
+    return name == "$END" or name.lstrip("_")[:1].isupper()
+
+
 def _expected(names) -> str:
-    words = sorted({describe_terminal(n) for n in names})
+    names = [n for n in names if _is_terminal(n)]
+    words = sorted({describe_terminal(n) for n in names if n != "$END"} |
+                   ({"end of file"} if "$END" in names else set()))
     if not words:
         return ""
     if len(words) > 10:
@@ -116,48 +122,55 @@ def _expected(names) -> str:
     return ", expected " + (words[0] if len(words) == 1 else "one of " + ", ".join(words))
 
 
-def _hint(exc: UnexpectedInput) -> str | None:
-    from coverage_engine.parser import _raw_parse
-
-    def parse(snippet: str):
-        try:
-            return _raw_parse(snippet)
-        except OscError:
-            return None
-
-    try:
-        return exc.match_examples(parse, HINTS, use_accepts=True)
-    except Exception:  # noqa: BLE001 - a hint is a nicety; never let it hide the real error
-        return None
+def _signature(failure: ParseFailure) -> tuple[int, str | None]:
+    return failure.state, getattr(failure.token, "type", None)
 
 
-def syntax_error_from_lark(exc: UnexpectedInput, file: str, text: str) -> OscSyntaxError:
-    """Our error for lark's ``exc``: location of the offending token, source line, message and hint."""
-    line = max(getattr(exc, "line", 1) or 1, 1)
-    column = max(getattr(exc, "column", 1) or 1, 1)
-    start = getattr(exc, "pos_in_stream", None) or 0
-    if isinstance(exc, UnexpectedToken):
-        token = exc.token
-        if token.type == "$END":
-            message = "unexpected end of file" + _expected(exc.expected)
-        else:
-            message = f"unexpected {_describe_token(token)}" + _expected(exc.accepts or exc.expected)
-        end = start + len(str(token))
-    elif isinstance(exc, UnexpectedCharacters):
+def hint_for(failure: ParseFailure) -> str | None:
+    """The label of :data:`HINTS` whose snippet fails like ``failure`` (same state; same token first)."""
+    from coverage_engine.parser import raw_parse
+
+    state_only = None
+    for label, snippets in HINTS.items():
+        for snippet in snippets:
+            try:
+                raw_parse(snippet)
+            except ParseFailure as other:
+                if other.state != failure.state:
+                    continue
+                if _signature(other) == _signature(failure):
+                    return label
+                if state_only is None:
+                    state_only = label
+            except (OscError, RecursionError, ValueError):
+                continue
+    return state_only
+
+
+def syntax_error(failure: ParseFailure, file: str, text: str) -> OscSyntaxError:
+    """Our error for a parse failure: location of the offending token, source line, message, hint."""
+    token = failure.token
+    if token is None:  # the lexer found a character no token starts with
+        start, line, column = failure.pos, failure.line, failure.column
         char = text[start] if 0 <= start < len(text) else ""
         if char in "\"'":
             message = "unterminated string"
+        elif char == "|":
+            message = "unterminated |quoted identifier|"
         else:
-            message = f"unexpected character {char!r}" + _expected(exc.allowed or ())
+            message = f"unexpected character {char!r}" + _expected(failure.expected)
         end = start + 1
-    elif isinstance(exc, UnexpectedEOF):
-        message = "unexpected end of file" + _expected(exc.expected)
-        end = start
-    else:  # pragma: no cover - lark has no other subclasses today
-        message, end = str(exc), start
-    lines = text.splitlines()
-    if line > len(lines) and lines:
+    else:
+        start, line, column = token.start_pos, token.line, token.column
+        end = token.end_pos
+        if token.type == "$END":
+            message = "unexpected end of file" + _expected(failure.expected)
+        else:
+            message = f"unexpected {_describe_token(token)}" + _expected(failure.expected)
+    lines = _LINE_BREAK.split(text)
+    if line > len(lines):
         line, column = len(lines), len(lines[-1]) + 1
     source_line = lines[line - 1] if 0 < line <= len(lines) else None
     location = Location(file, line, column, line, column + max(end - start, 0), start, end)
-    return OscSyntaxError(message, location, source_line, _hint(exc))
+    # the hint table re-enters the parser: restore nothing, the caller is done with this text
+    return OscSyntaxError(message, location, source_line, hint_for(failure))

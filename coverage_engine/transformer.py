@@ -1,112 +1,59 @@
-"""The one lark Transformer that turns the parse tree of ``grammar.lark`` into :mod:`coverage_engine.syntax` nodes.
+"""The one lark Transformer that turns ``grammar.lark`` matches into :mod:`coverage_engine.syntax` nodes.
 
-No semantics here: names are not looked up, units not converted, nothing evaluated. Constructs the
-grammar accepts only so they can be refused by name (``cover``, ``on @event``, ``sample`` …) are
-rejected here with :class:`UnsupportedFeatureError` at their position.
+It runs inside the LALR parser (no intermediate parse tree) with every token kept, so each rule
+sees its first and last token and computes its own :class:`~coverage_engine.syntax.Location` --
+exact to the character, which the variation generator needs to cut and replace source. No
+semantics here: nothing is looked up, converted or evaluated. Constructs the grammar accepts only
+so they can be refused by name (``cover``, ``on @event``, ``sample`` …) raise
+:class:`UnsupportedFeatureError` at their position.
 """
 
 from __future__ import annotations
 
-from lark import Token, v_args
-
 from coverage_engine import syntax as s
-from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
-from coverage_engine.strings import unescape_string
+from coverage_engine.errors import OscSyntaxError
+from coverage_engine.lexer import Token
 from coverage_engine.transformer_expr import BehaviorExpressionRules
 
-# Names the reference reserves for features we do not implement; written like a call they would
-# otherwise parse as an ordinary modifier or method invocation.
-UNSUPPORTED_CALLS = {
-    "cover": "cover()",
-    "record": "record()",
-    "remove_default": "remove_default()",
-}
-UNSUPPORTED_EXPR_CALLS = {
-    "sample": "sample()",
-    "range": "range() (write [low..high] instead)",
-    "rise": "rise()",
-    "fall": "fall()",
-    "every": "every()",
-}
 
-
-@v_args(meta=True)
 class SyntaxBuilder(BehaviorExpressionRules):
-    """Builds syntax nodes; ``file`` names the source in every :class:`~coverage_engine.syntax.Location`."""
-
-    UNSUPPORTED_EXPR_CALLS = UNSUPPORTED_EXPR_CALLS
-
-    def __init__(self, file: str, text: str) -> None:
-        super().__init__(visit_tokens=False)
-        self.file = file
-        self.text = text
-
-    # ------------------------------------------------------------------ locations and helpers
-
-    def loc(self, meta) -> s.Location:
-        if getattr(meta, "empty", True):
-            return s.Location(self.file, 1, 1, 1, 1, 0, 0)
-        return s.Location(self.file, meta.line, meta.column, meta.end_line, meta.end_column,
-                          meta.start_pos, meta.end_pos)
-
-    def tloc(self, tok: Token) -> s.Location:
-        return s.Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
-                          tok.start_pos, tok.end_pos)
-
-    def span(self, first: s.Location, last: s.Location) -> s.Location:
-        return s.Location(self.file, first.line, first.column, last.end_line, last.end_column,
-                          first.start_pos, last.end_pos)
-
-    def unsupported(self, what: str, where: s.Location | Token) -> UnsupportedFeatureError:
-        loc = self.tloc(where) if isinstance(where, Token) else where
-        return UnsupportedFeatureError(f"not supported: {what}", loc, self.source_line(loc.line))
-
-    def source_line(self, line: int) -> str | None:
-        lines = self.text.splitlines()
-        return lines[line - 1] if 0 < line <= len(lines) else None
-
-    @staticmethod
-    def name(tok: Token) -> str:
-        value = str(tok)
-        if value.startswith("|") and value.endswith("|") and len(value) > 1:
-            return value[1:-1]
-        return value
-
-    def check_call_name(self, name: s.QualifiedName) -> None:
-        if len(name.parts) == 1 and name.parts[0] in UNSUPPORTED_CALLS:
-            raise self.unsupported(UNSUPPORTED_CALLS[name.parts[0]], name.location)
+    """Callbacks for the declaration rules; expressions and behaviours come from the mixin."""
 
     # ------------------------------------------------------------------ file level
 
-    def start(self, meta, children):
+    def start(self, children):
         imports = tuple(c for c in children if isinstance(c, s.Import))
-        decls = tuple(c for c in children if not isinstance(c, s.Import))
+        decls = tuple(c for c in children if not isinstance(c, (s.Import, Token)))
         return s.CompilationUnit(self.file, imports, decls, self.text)
 
-    def import_stmt(self, meta, children):
-        (ref,) = children
+    def import_stmt(self, children):
+        ref = children[1]
         if isinstance(ref, Token):
-            return s.Import(unescape_string(str(ref)), True, self.loc(meta))
-        return s.Import(ref.dotted, False, self.loc(meta))
+            from coverage_engine.strings import unescape_string
 
-    def qualified_name(self, meta, children):
-        return s.QualifiedName(tuple(self.name(t) for t in children), self.loc(meta))
+            return s.Import(unescape_string(str(ref)), True, self.loc(children))
+        return s.Import(ref.dotted, False, self.loc(children))
 
-    def namespace_decl(self, meta, children):
+    def qualified_name(self, children):
+        if len(children) == 1:
+            return s.QualifiedName((self.name(children[0]),), self.tloc(children[0]))
+        return s.QualifiedName(tuple(self.name(t) for t in children if t.type == "NAME"), self.loc(children))
+
+    def namespace_decl(self, children):
         raise self.unsupported("namespaces", children[0])
 
-    def physical_type_decl(self, meta, children):
-        name, args = children
+    def physical_type_decl(self, children):
+        name, args = children[1], children[5]
         exps = []
         for arg_name, value, loc in args:
             if arg_name in ("factor", "offset"):
                 raise OscSyntaxError(f"'{arg_name}' belongs in a unit declaration, not a type", loc,
                                      self.source_line(loc.line))
             exps.append((arg_name, self.exponent(value, loc)))
-        return s.PhysicalTypeDecl(self.name(name), tuple(exps), self.loc(meta))
+        return s.PhysicalTypeDecl(self.name(name), tuple(exps), self.loc(children))
 
-    def unit_decl(self, meta, children):
-        name, type_name, args = children
+    def unit_decl(self, children):
+        name, type_name, args = children[1], children[3], children[7]
         exps, factor, offset = [], None, None
         for arg_name, value, loc in args:
             if arg_name == "factor":
@@ -115,22 +62,22 @@ class SyntaxBuilder(BehaviorExpressionRules):
                 offset = float(value)
             else:
                 exps.append((arg_name, self.exponent(value, loc)))
-        return s.UnitDecl(self.name(name), self.name(type_name), tuple(exps), factor, offset, self.loc(meta))
+        return s.UnitDecl(self.name(name), self.name(type_name), tuple(exps), factor, offset,
+                          self.loc(children))
 
     def exponent(self, value: int | float, loc: s.Location) -> int:
         if not isinstance(value, int):
             raise OscSyntaxError("an SI exponent must be an integer", loc, self.source_line(loc.line))
         return value
 
-    def si_args(self, meta, children):
-        return children
+    def si_args(self, children):
+        return [c for c in children if not isinstance(c, Token)]
 
-    def si_arg(self, meta, children):
-        name, value = children
-        return (self.name(name), value, self.loc(meta))
+    def si_arg(self, children):
+        return (self.name(children[0]), children[2][0], self.loc(children))
 
-    def signed_number(self, meta, children):
-        *sign, tok = children
+    def signed_number(self, children):
+        tok = children[-1]
         text = str(tok)
         if tok.type == "HEX":
             value: int | float = int(text, 16)
@@ -138,53 +85,53 @@ class SyntaxBuilder(BehaviorExpressionRules):
             value = int(text)
         else:
             value = float(text)
-        return -value if sign else value
+        return (-value if len(children) > 1 else value), self.loc(children)
 
-    def enum_decl(self, meta, children):
-        name, *members = children
-        return s.EnumDecl(self.name(name), tuple(members), self.loc(meta))
+    def enum_decl(self, children):
+        members = tuple(c for c in children if isinstance(c, s.EnumMember))
+        return s.EnumDecl(self.name(children[1]), members, self.loc(children))
 
-    def enum_member(self, meta, children):
-        name, value = children[0], (children[1] if len(children) > 1 else None)
+    def enum_member(self, children):
         number = None
-        if value is not None:
+        if len(children) == 3:
+            value = children[2]
             number = int(str(value), 16) if value.type == "HEX" else int(str(value))
-        return s.EnumMember(self.name(name), number, self.loc(meta))
+        return s.EnumMember(self.name(children[0]), number, self.loc(children))
 
-    def enum_extend_decl(self, meta, children):
+    def enum_extend_decl(self, children):
         raise self.unsupported("extending an enum", children[0])
 
     # ------------------------------------------------------------------ type declarations
 
-    def type_decl(self, meta, children):
-        kind, name, *rest = children
-        parent = None
-        if rest and isinstance(rest[0], s.QualifiedName):
-            parent = rest.pop(0)
-        return s.TypeDecl(str(kind), name, parent, tuple(rest), self.loc(meta))
+    def type_decl(self, children):
+        kind, name = children[0], children[1]
+        parent = children[2] if isinstance(children[2], s.QualifiedName) else None
+        members = tuple(c for c in children[2:] if not isinstance(c, (Token, s.QualifiedName)))
+        return s.TypeDecl(str(kind), name, parent, members, self.loc(children))
 
-    def inherits(self, meta, children):
-        if len(children) > 1:
-            raise self.unsupported("conditional inheritance", children[1])
-        return children[0]
+    def inherits(self, children):
+        if len(children) > 2:
+            raise self.unsupported("conditional inheritance", children[2])
+        return children[1]
 
-    def inherits_condition(self, meta, children):
-        return self.loc(meta)
+    def inherits_condition(self, children):
+        return self.loc(children)
 
-    def modifier_decl(self, meta, children):
-        name, *rest = children
+    def modifier_decl(self, children):
+        name = children[1]
         if len(name.parts) > 1:
             raise self.unsupported("actor modifiers (modifier actor.name)", name.location)
-        if rest and isinstance(rest[0], s.Location):
-            raise self.unsupported("modifier ... of ...", rest[0])
-        return s.TypeDecl("modifier", name, None, tuple(rest), self.loc(meta))
+        if isinstance(children[2], s.Location):
+            raise self.unsupported("modifier ... of ...", children[2])
+        members = tuple(c for c in children[2:] if not isinstance(c, Token))
+        return s.TypeDecl("modifier", name, None, members, self.loc(children))
 
-    def modifier_of(self, meta, children):
-        return self.loc(meta)
+    def modifier_of(self, children):
+        return self.loc(children)
 
-    def extend_decl(self, meta, children):
-        _, name, *members = children
-        return s.Extension(name, tuple(members), self.loc(meta))
+    def extend_decl(self, children):
+        members = tuple(c for c in children[2:] if not isinstance(c, Token))
+        return s.Extension(children[1], members, self.loc(children))
 
     # ------------------------------------------------------------------ members
 
@@ -192,7 +139,8 @@ class SyntaxBuilder(BehaviorExpressionRules):
         names, type_ref, default, with_members = [], None, None, ()
         for c in children:
             if isinstance(c, Token):
-                names.append(self.name(c))
+                if c.type == "NAME":
+                    names.append(self.name(c))
             elif isinstance(c, s.TypeRef):
                 type_ref = c
             elif isinstance(c, tuple):
@@ -201,88 +149,96 @@ class SyntaxBuilder(BehaviorExpressionRules):
                 default = c
         return tuple(names), type_ref, default, with_members
 
-    def param_decl(self, meta, children):
+    def param_decl(self, children):
         names, type_ref, default, with_members = self._param_parts(children)
-        return s.ParameterDecl(names, type_ref, default, with_members, self.loc(meta))
+        return s.ParameterDecl(names, type_ref, default, with_members, self.loc(children))
 
-    def global_decl(self, meta, children):
+    def global_decl(self, children):
         names, type_ref, default, with_members = self._param_parts(children)
-        return s.ParameterDecl(names, type_ref, default, with_members, self.loc(meta), is_global=True)
+        return s.ParameterDecl(names, type_ref, default, with_members, self.loc(children), is_global=True)
 
-    def var_decl(self, meta, children):
+    def var_decl(self, children):
         names, type_ref, default, _ = self._param_parts(children)
-        return s.VariableDecl(names, type_ref, default, self.loc(meta))
+        return s.VariableDecl(names, type_ref, default, self.loc(children))
 
-    def default(self, meta, children):
-        return children[0]
+    def default(self, children):
+        return children[1]
 
-    def type_ref(self, meta, children):
-        if len(children) == 2:
-            return s.TypeRef(children[1], True, self.loc(meta))
-        return s.TypeRef(children[0], False, self.loc(meta))
+    def type_ref(self, children):
+        return s.TypeRef(children[-1], len(children) == 3, self.loc(children))
 
-    def event_decl(self, meta, children):
-        name, *rest = children
+    def event_decl(self, children):
         params: tuple = ()
-        for c in rest:
+        for c in children[2:]:
             if isinstance(c, tuple):
                 params = c
             elif isinstance(c, s.Location):
                 raise self.unsupported("event ... is <condition>", c)
-        return s.EventDecl(self.name(name), params, self.loc(meta))
+        return s.EventDecl(self.name(children[1]), params, self.loc(children))
 
-    def event_is(self, meta, children):
-        return self.loc(meta)
+    def event_is(self, children):
+        return self.loc(children)
 
-    def method_decl(self, meta, children):
-        name, params, *rest = children
-        return_type = rest[0] if len(rest) == 2 else None
-        external, arguments = rest[-1]
-        return s.MethodDecl(self.name(name), params or (), return_type, external, arguments, self.loc(meta))
+    def method_decl(self, children):
+        params: tuple = ()
+        return_type = None
+        impl = None
+        for c in children[2:]:
+            if isinstance(c, tuple) and c and isinstance(c[0], s.MethodParameter):
+                params = c
+            elif isinstance(c, s.TypeRef):
+                return_type = c
+            elif isinstance(c, list):
+                impl = c
+        external, arguments = impl
+        return s.MethodDecl(self.name(children[1]), params, return_type, external, arguments,
+                            self.loc(children))
 
-    def method_params(self, meta, children):
-        return tuple(children)
+    def method_params(self, children):
+        return tuple(c for c in children if isinstance(c, s.MethodParameter))
 
-    def method_param(self, meta, children):
-        name, type_ref, *default = children
-        return s.MethodParameter(self.name(name), type_ref, default[0] if default else None, self.loc(meta))
+    def method_param(self, children):
+        default = children[3] if len(children) > 3 else None
+        return s.MethodParameter(self.name(children[0]), children[2], default, self.loc(children))
 
-    def external_impl(self, meta, children):
-        if len(children) == 3:
+    def external_impl(self, children):
+        if children[0].type == "ONLY":
             raise self.unsupported("'only' methods", children[0])
-        name, arguments = children
-        return name, arguments or ()
+        name = children[1]
+        arguments = next((c for c in children if isinstance(c, tuple)), ())
+        return [name, arguments]
 
-    def expression_impl(self, meta, children):
-        raise self.unsupported("methods implemented by 'is expression'", self.loc(meta))
+    def expression_impl(self, children):
+        raise self.unsupported("methods implemented by 'is expression'", children[0])
 
-    def undefined_impl(self, meta, children):
-        raise self.unsupported("methods declared 'is undefined'", self.loc(meta))
+    def undefined_impl(self, children):
+        raise self.unsupported("methods declared 'is undefined'", children[0])
 
-    def with_block(self, meta, children):
-        return tuple(children)
+    def with_block(self, children):
+        return tuple(c for c in children if not isinstance(c, Token))
 
-    def keep_stmt(self, meta, children):
+    def keep_stmt(self, children):
         return children[0]
 
-    def keep(self, meta, children):
-        qualifier = children[1] if len(children) == 3 else None
-        return s.KeepConstraint(children[-1], qualifier is not None and str(qualifier) == "default",
-                                self.loc(meta))
+    def keep(self, children):
+        qualifier = children[2] if isinstance(children[2], Token) else None
+        return s.KeepConstraint(children[-2], qualifier is not None and qualifier.type == "DEFAULT",
+                                self.loc(children))
 
-    def modifier_stmt(self, meta, children):
+    def modifier_stmt(self, children):
         return children[0]
 
-    def modifier_call(self, meta, children):
-        name, arguments = children
+    def modifier_call(self, children):
+        name = children[0]
         self.check_call_name(name)
-        return s.ModifierInvocation(name, arguments or (), self.loc(meta))
+        arguments = children[2] if isinstance(children[2], tuple) else ()
+        return s.ModifierInvocation(name, arguments, self.loc(children))
 
-    def until_stmt(self, meta, children):
+    def until_stmt(self, children):
         raise self.unsupported("until", children[0])
 
-    def on_directive(self, meta, children):
+    def on_directive(self, children):
         raise self.unsupported("on @event", children[0])
 
-    def do_directive(self, meta, children):
-        return s.DoDirective(children[1], self.loc(meta))
+    def do_directive(self, children):
+        return s.DoDirective(children[1], self.loc(children))

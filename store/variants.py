@@ -252,9 +252,13 @@ def find_variants(engine: Engine, assignment: Mapping[str, object] | None = None
     ensure_schema(engine, TABLES)
     query = select(variants)
     conditions = []
-    for _key, value, _exact in wanted:
-        conditions.append(variants.c.assignment.like(
-            "%: " + _like_escape(json.dumps(value, ensure_ascii=False)) + "%", escape="\\"))
+    for key, value, exact in wanted:
+        if exact:
+            conditions.append(variants.c.assignment.like(
+                "%" + _like_escape(json.dumps(key, ensure_ascii=False)) + ": %", escape="\\"))
+        if not isinstance(value, (int, float)) or isinstance(value, bool):  # 1 and 1.0 differ as text
+            conditions.append(variants.c.assignment.like(
+                "%: " + _like_escape(json.dumps(value, ensure_ascii=False)) + "%", escape="\\"))
     if source_path is not None:
         query = query.join(source_files, source_files.c.id == variants.c.source_id)
         conditions.append(source_files.c.path == source_path)

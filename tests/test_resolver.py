@@ -52,7 +52,6 @@ def test_physical_values_are_si_and_arithmetic_promotes(tmp_path):
         global d: length = 3.2cm
         global t: time = 2.0s + 500ms
         global f: float = 2 * 1.25
-        global i: int = 7 / 7
         scenario sc:
             do serial:
                 log(d)
@@ -147,7 +146,7 @@ def test_keep_sets_an_action_argument(tmp_path):
     ("wait elapsed(3)", OscTypeError, 22),
     ("no_such_action()", NameLookupError, 9),
     ("log(1s + 1)", OscTypeError, 13),
-    ("log('x') with:\n                no_such_modifier()", NameLookupError, 17),
+    ("log('x') with:\n                    no_such_modifier()", NameLookupError, 13),
 ])
 def test_errors_carry_positions(tmp_path, body, error, column):
     with pytest.raises(error) as info:

@@ -5,12 +5,6 @@ from __future__ import annotations
 import io
 
 import pytest
-
-from coverage_engine import model as m
-from executor.runtime.context import ScenarioContext
-from executor.runtime.logger import Logger
-from executor.runtime.runner import ScenarioRunner
-from executor.simulation import SimulationClock
 from runtime_models import (
     LOC,
     action,
@@ -28,6 +22,12 @@ from runtime_models import (
     wait_event,
     wait_until,
 )
+
+from coverage_engine import model as m
+from executor.runtime.context import ScenarioContext
+from executor.runtime.logger import Logger
+from executor.runtime.runner import ScenarioRunner
+from executor.simulation import SimulationClock
 
 
 class Steps:
@@ -171,3 +171,38 @@ def test_unknown_action_fails_setup():
 @pytest.mark.parametrize("body", [None, serial()])
 def test_empty_scenario_succeeds(body):
     assert run(scenario(body))[0].passed
+
+
+@pytest.mark.parametrize("body", [
+    serial(log("a"), wait_elapsed(1.0), log("b")),
+    modified("timeout", serial(wait_elapsed(0.5), wait_elapsed(5.0)), duration=2.0),
+    parallel(serial(wait_elapsed(0.3), emit("go"), wait_elapsed(0.7)), serial(wait_event("go"), log("got"))),
+    one_of(wait_elapsed(3.0), modified("timeout", wait_elapsed(9.0), duration=1.25)),
+    modified("repeat", serial(wait_elapsed(0.2), log("r")), count=3),
+    modified("retry", modified("inverter", wait_elapsed(0.35)), count=2),
+    modified("success_is_running", wait_elapsed(0.2)),
+])
+def test_skipping_idle_ticks_changes_nothing(body):
+    outcomes = []
+    for skip in (True, False):
+        sim = Steps()
+        out = io.StringIO()
+        ctx = ScenarioContext(name="t", clock=SimulationClock(sim.dt), logger=Logger(stream=out))
+        original = sim.step
+
+        def bounded(original=original, sim=sim):
+            original()
+            if sim.steps > 200:
+                raise KeyboardInterrupt
+
+        sim.step = bounded
+        runner = ScenarioRunner(scenario(body), ctx, simulation=sim, tick_period=sim.dt, skip_idle_ticks=skip)
+        try:
+            result = runner.run()
+            summary = (result.passed, result.message)
+        except Exception as exc:  # noqa: BLE001 - RunAborted for the endless one
+            summary = ("aborted", type(exc).__name__)
+        lines = [line.split("] ", 2)[-1] for line in out.getvalue().splitlines()]
+        outcomes.append((summary, sim.steps, lines, runner.ticks))
+    assert outcomes[0][:3] == outcomes[1][:3]
+    assert outcomes[0][3] <= outcomes[1][3]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,11 +82,22 @@ def _assignment_fragments(plan: VariationPlan) -> list[list[str]]:
             for key, values in zip(plan.keys, plan.stored(), strict=True)]
 
 
-def generate(plan: VariationPlan, output_dir: str | os.PathLike) -> Iterator[Generated]:
+def _same_content(path: str, data: bytes) -> bool:
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(len(data) + 1) == data
+    except OSError:
+        return False
+
+
+def generate(plan: VariationPlan, output_dir: str | os.PathLike,
+             existing: Container[str] = ()) -> Iterator[Generated]:
     """Write every valid combination of ``plan`` to ``output_dir`` and yield each (also skipped ones).
 
     The folder is created if needed. Files are written as UTF-8 bytes exactly as hashed, so the
-    stored content hash always matches the file.
+    stored content hash always matches the file. A file named in ``existing`` (names of the earlier
+    generation) that already holds exactly the new text is left untouched: regenerating the same input
+    rewrites nothing (truncating files is slow on some file systems, and mtimes stay meaningful).
     """
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
@@ -102,6 +113,10 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike) -> Iterator[Gen
         text = template.render(index, choices)
         data = text.encode("utf-8")
         path = f"{prefix}{index}{SUFFIX}"
+        if existing and os.path.basename(path) in existing and _same_content(path, data):
+            yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices),
+                            None)
+            continue
         fd = os.open(path, flags, 0o644)
         try:
             view = memoryview(data)
@@ -109,5 +124,8 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike) -> Iterator[Gen
                 view = view[os.write(fd, view):]
         finally:
             os.close(fd)
-        assignment = "{" + ", ".join(f[c] for f, c in zip(fragments, choices, strict=True)) + "}"
-        yield Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None)
+        yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices), None)
+
+
+def _assignment(fragments: list[list[str]], choices: tuple[int, ...]) -> str:
+    return "{" + ", ".join(f[c] for f, c in zip(fragments, choices, strict=True)) + "}"

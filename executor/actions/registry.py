@@ -27,8 +27,17 @@ BUILTIN_ACTIONS: dict[str, str] = {
 }
 
 
+#: Modifiers the runtime implements (executor.runtime.modifiers).
+BUILTIN_MODIFIERS = ("timeout", "repeat", "retry", "inverter", "failure_is_running", "failure_is_success",
+                     "running_is_failure", "running_is_success", "success_is_failure", "success_is_running")
+
+
 class ActionNotFoundError(OscError):
     """no implementation for action"""
+
+
+class ModifierNotFoundError(OscError):
+    """no implementation for modifier"""
 
 
 class ActionLoadError(OscError):
@@ -109,9 +118,24 @@ def iter_action_calls(behavior: Behavior | None) -> Iterator[ActionCall]:
         yield from iter_action_calls(behavior.child)
 
 
+def iter_modifiers(behavior: Behavior | None) -> Iterator[Modified]:
+    """Every modifier application in a behaviour tree of the model."""
+    if isinstance(behavior, Modified):
+        yield behavior
+        yield from iter_modifiers(behavior.child)
+    elif isinstance(behavior, Composite):
+        for child in behavior.children:
+            yield from iter_modifiers(child)
+
+
 def check_actions_available(scenarios: Iterable[Scenario]) -> None:
-    """Raise :class:`ActionNotFoundError` for the first invoked action without an implementation."""
+    """Raise for the first invoked action or applied modifier without an implementation."""
     for scenario in scenarios:
         for call in iter_action_calls(scenario.body):
             if find_plugin(call) is None:
                 raise _not_found(call)
+        for applied in iter_modifiers(scenario.body):
+            if applied.modifier not in BUILTIN_MODIFIERS:
+                raise ModifierNotFoundError(
+                    f"modifier '{applied.modifier}' has no implementation (available: "
+                    f"{', '.join(BUILTIN_MODIFIERS)})", applied.location)

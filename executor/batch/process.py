@@ -8,9 +8,11 @@ it after a grace period; whatever is left of the group when the child exits is k
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Sequence
@@ -18,6 +20,29 @@ from dataclasses import dataclass
 from typing import BinaryIO
 
 _CHUNK = 64 * 1024
+
+
+def _parent_death_signal():
+    """On Linux, a function for the child to run before exec: die (SIGKILL) when this process dies.
+
+    So a kill -9 of the runner or worker does not leave its children running; their process groups
+    (grandchildren) are ended by the next sweep on this host, which knows them from the store.
+    """
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+    pr_set_pdeathsig = 1
+
+    def preexec() -> None:
+        prctl(pr_set_pdeathsig, signal.SIGKILL)
+
+    return preexec
+
+
+_PREEXEC = _parent_death_signal()
 
 
 @dataclass(frozen=True)
@@ -81,7 +106,7 @@ class ChildProcess:
             self.proc = subprocess.Popen(
                 self.argv, cwd=self.cwd, stdin=subprocess.DEVNULL,
                 stdout=subprocess.PIPE if self.echo is not None else log, stderr=subprocess.STDOUT,
-                start_new_session=True, close_fds=True)
+                start_new_session=True, close_fds=True, preexec_fn=_PREEXEC)
         if self.timeout is not None:
             self._arm(self.timeout, self._on_timeout)
         return self.proc.pid

@@ -305,6 +305,7 @@ class Worker:
     def _halt(self, batch: Batch) -> None:
         if batch.id not in self._halted:
             self._halted.add(batch.id)
+            self._claim_more = False
             count = self.store.halt(batch.id, "not started: --halt-on-failure after a failed job")
             if count:
                 self.reporter.warn(f"halting: {count} job(s) not started (--halt-on-failure)")

@@ -12,7 +12,6 @@ import py_trees
 from py_trees.common import Status
 
 from coverage_engine.model import Expr
-
 from executor.runtime.context import ScenarioContext, ScenarioEnd
 
 
@@ -48,6 +47,10 @@ class WaitCondition(py_trees.behaviour.Behaviour):
         super().__init__(name)
         self.condition = condition
         self.context = context
+        from executor.runtime.quiescence import is_pure
+
+        #: depends on variables only, so it cannot change while no action runs
+        self.pure = is_pure(condition)
 
     def update(self) -> Status:
         return Status.SUCCESS if self.context.value(self.condition) else Status.RUNNING
@@ -75,9 +78,9 @@ class EmitEvent(py_trees.behaviour.Behaviour):
 
     def update(self) -> Status:
         if self.event == "end":
-            raise ScenarioEnd(True)
+            raise ScenarioEnd(True, behaviour=self)
         if self.event == "fail":
-            raise ScenarioEnd(False, "emit fail")
+            raise ScenarioEnd(False, "emit fail", behaviour=self)
         self.context.events.add(self.event)
         return Status.SUCCESS
 

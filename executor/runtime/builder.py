@@ -29,7 +29,6 @@ from coverage_engine.model import (
     WaitElapsed,
     WaitEvent,
 )
-
 from executor.actions.registry import load_action_class
 from executor.runtime import behaviours
 from executor.runtime.context import ScenarioContext, VariableHandle

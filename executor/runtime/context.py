@@ -8,21 +8,20 @@ unwinds the tick at once: nothing after them runs, in the same serial or anywher
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from coverage_engine.evaluate import evaluate
 from coverage_engine.model import Expr, Scenario
-
 from executor.runtime.logger import Logger
 
 
 class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error
     """``emit end`` (success) or ``emit fail`` (failure): ends the scenario immediately."""
 
-    def __init__(self, success: bool, message: str = "") -> None:
+    def __init__(self, success: bool, message: str = "", behaviour=None) -> None:
         super().__init__(message or ("end" if success else "fail"))
         self.success = success
         self.message = message
+        #: the behaviour that ended the scenario (marked in the failure snapshot)
+        self.behaviour = behaviour
 
 
 class Aborted(BaseException):  # noqa: N818 - raised by the signal handler; not an Exception,
@@ -53,20 +52,24 @@ class VariableHandle:
         return f"VariableHandle({self.key!r}={self._store.get(self.key)!r})"
 
 
-@dataclass
 class ScenarioContext:
-    """Everything a running scenario's behaviours share."""
+    """Everything a running scenario's behaviours share.
 
-    name: str
-    clock: object
-    logger: Logger
-    input_dir: str | None = None
-    output_dir: str | None = None
-    simulation: object | None = None
-    variables: dict[str, object] = field(default_factory=dict)
-    events: set[str] = field(default_factory=set)
-    #: run_process actions by their name (label), for process_log_check
-    processes: dict[str, list] = field(default_factory=dict)
+    ``variables`` maps variable keys to current values, ``events`` holds the emitted events and
+    ``processes`` the run_process actions by name (label), for process_log_check.
+    """
+
+    def __init__(self, name: str, clock: object, logger: Logger, input_dir: str | None = None,
+                 output_dir: str | None = None, simulation: object | None = None) -> None:
+        self.name = name
+        self.clock = clock
+        self.logger = logger
+        self.input_dir = input_dir
+        self.output_dir = output_dir
+        self.simulation = simulation
+        self.variables: dict[str, object] = {}
+        self.events: set[str] = set()
+        self.processes: dict[str, list] = {}
 
     def init_variables(self, scenario: Scenario) -> None:
         """Give every ``var`` its initial value (in declaration order, so one may use another)."""

@@ -1,4 +1,4 @@
-"""Python side of the ``osc.helpers`` external methods that need run-time state (``common``).
+"""Python side of the ``osc.helpers`` external methods ``common`` (run-time directories) and ``random``.
 
 ``common.get_output_directory()`` and ``common.get_scenario_file_directory()`` return absolute paths
 of the running scenario; the runtime publishes them with :func:`set_directories` before each run.
@@ -25,3 +25,35 @@ def get_scenario_file_directory() -> str:
 def get_output_directory() -> str:
     """Absolute output directory of the running scenario (the working directory without ``-o``)."""
     return _directories["output"] or os.getcwd()
+
+
+# --------------------------------------------------------------------------------------------------
+# ``random``: values drawn when the action starts (seed with ``random.seed(n)`` for repeatable runs)
+
+
+def seed(seed_value: int = 0) -> None:
+    """Seed the generator used by the other ``random`` methods."""
+    import random
+
+    random.seed(seed_value)
+
+
+def get_float(min_val: float, max_val: float) -> float:
+    """A float in ``[min_val, max_val]``."""
+    import random
+
+    return random.uniform(min_val, max_val)
+
+
+def get_int(min_val: int, max_val: int) -> int:
+    """An int in ``[min_val, max_val]`` (both included)."""
+    import random
+
+    return random.randint(int(min_val), int(max_val))
+
+
+def get_random_list_element(elements_list: list) -> object:
+    """One element of the list (None for an empty list)."""
+    import random
+
+    return random.choice(elements_list) if elements_list else None

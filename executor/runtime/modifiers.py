@@ -14,6 +14,7 @@ import py_trees
 from py_trees import decorators
 from py_trees.common import Status
 
+from executor.actions.registry import BUILTIN_MODIFIERS
 from executor.runtime.context import ScenarioContext
 
 
@@ -53,6 +54,7 @@ _CONVERTERS = {
 }
 
 MODIFIERS = ("timeout", "repeat", "retry", *_CONVERTERS)
+assert set(MODIFIERS) == set(BUILTIN_MODIFIERS), "keep executor.actions.registry.BUILTIN_MODIFIERS in step"
 
 
 def _int_argument(modifier: str, arguments: dict, name: str, default: int | None) -> int:

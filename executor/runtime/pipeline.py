@@ -12,11 +12,8 @@ one failing testcase. Only the run path imports py_trees (and rich only for ``-t
 from __future__ import annotations
 
 import os
-import shutil
-from dataclasses import dataclass
 
 from coverage_engine.errors import OscError
-
 from executor.runtime.logger import Logger
 
 EXIT_OK = 0
@@ -27,28 +24,35 @@ class UsageProblem(Exception):
     """A bad option value or combination (reported as ``error: …``)."""
 
 
-@dataclass
 class ExecutionRequest:
-    """The options of one ``scenario_execution`` call."""
+    """The options of one ``scenario_execution`` call (a plain class: it is created on every start)."""
 
-    scenario: str
-    output_dir: str | None = None
-    dry_run: bool = False
-    log_model: bool = False
-    debug: bool = False
-    live_tree: bool = False
-    dot: bool = False
-    step_duration: float = 0.1
-    parameter_file: str | None = None
-    create_template: bool = False
-    post_run: tuple[str, ...] = ()
-    simulation: str | None = None
-    per_scenario: bool = False
+    def __init__(self, scenario: str, output_dir: str | None = None, dry_run: bool = False,
+                 log_model: bool = False, debug: bool = False, live_tree: bool = False, dot: bool = False,
+                 step_duration: float = 0.1, parameter_file: str | None = None, create_template: bool = False,
+                 post_run: tuple[str, ...] = (), simulation: str | None = None, per_scenario: bool = False) -> None:
+        self.scenario = scenario
+        self.output_dir = output_dir
+        self.dry_run = dry_run
+        self.log_model = log_model
+        self.debug = debug
+        self.live_tree = live_tree
+        self.dot = dot
+        self.step_duration = step_duration
+        self.parameter_file = parameter_file
+        self.create_template = create_template
+        self.post_run = tuple(post_run)
+        self.simulation = simulation
+        self.per_scenario = per_scenario
 
 
 def _check_options(request: ExecutionRequest) -> None:
     if not request.step_duration or request.step_duration <= 0:
         raise UsageProblem(f"--step-duration must be a positive number of seconds, got {request.step_duration}")
+    if not request.post_run:
+        return
+    import shutil
+
     from executor.runtime.post_run import split_hook
 
     for hook in request.post_run:
@@ -60,10 +64,9 @@ def _check_options(request: ExecutionRequest) -> None:
             raise UsageProblem(f"--post-run '{hook}': '{program}' is not an executable file or command")
 
 
-def _load(request: ExecutionRequest, logger: Logger):
+def _load(request: ExecutionRequest):
     """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``."""
     from coverage_engine.loader import load_scenario_file
-
     from executor.runtime.plan import split_output_dirs
 
     documents: list = [None]
@@ -103,7 +106,7 @@ def execute(request: ExecutionRequest) -> int:
             os.remove(stale)
 
     try:
-        loaded = _load(request, logger)
+        loaded = _load(request)
         from executor.actions.registry import check_actions_available
 
         check_actions_available(s for scenario_file, _ in loaded for s in scenario_file.scenarios)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.model import Scenario, ScenarioFile
@@ -20,13 +19,18 @@ from coverage_engine.model import Scenario, ScenarioFile
 OUTPUT_DIR_KEY = "_output_dir"
 
 
-@dataclass(frozen=True)
 class PlannedRun:
     """One scenario run: the resolved scenario, its result name and its output directory."""
 
-    scenario: Scenario
-    name: str
-    output_dir: str | None
+    __slots__ = ("scenario", "name", "output_dir")
+
+    def __init__(self, scenario: Scenario, name: str, output_dir: str | None) -> None:
+        self.scenario = scenario
+        self.name = name
+        self.output_dir = output_dir
+
+    def __repr__(self) -> str:
+        return f"PlannedRun({self.name!r}, output_dir={self.output_dir!r})"
 
 
 def split_output_dirs(document: Mapping | None) -> tuple[dict | None, dict[str, str]]:

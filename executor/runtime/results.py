@@ -2,18 +2,26 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
-
-@dataclass
 class ScenarioResult:
-    """``passed`` or not; on failure a one-line ``message`` and ``output`` (the last tree snapshot)."""
+    """``passed`` or not; on failure a one-line ``message`` and ``output`` (the last tree snapshot).
 
-    name: str
-    passed: bool
-    message: str = ""
-    output: str = ""
-    duration: float = 0.0
-    start_time: float = 0.0
-    output_dir: str | None = None
-    aborted: bool = False
+    A plain class rather than a dataclass: it is imported on every run, where start-up time counts.
+    """
+
+    __slots__ = ("name", "passed", "message", "output", "duration", "start_time", "output_dir", "aborted")
+
+    def __init__(self, name: str, passed: bool, message: str = "", output: str = "", duration: float = 0.0,
+                 start_time: float = 0.0, output_dir: str | None = None, aborted: bool = False) -> None:
+        self.name = name
+        self.passed = passed
+        self.message = message
+        self.output = output
+        self.duration = duration
+        self.start_time = start_time
+        self.output_dir = output_dir
+        self.aborted = aborted
+
+    def __repr__(self) -> str:
+        state = "passed" if self.passed else f"failed: {self.message}"
+        return f"ScenarioResult({self.name!r}, {state})"

@@ -19,7 +19,6 @@ from py_trees.common import Status
 from coverage_engine.errors import OscError
 from coverage_engine.evaluate import EvaluationError
 from coverage_engine.model import Scenario
-
 from executor.actions.base import ActionError
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
@@ -51,7 +50,7 @@ class ScenarioRunner:
 
     def __init__(self, scenario: Scenario, context: ScenarioContext, *, name: str | None = None,
                  tick_period: float = 0.1, simulation=None, observers: list[TickObserver] | None = None,
-                 setup_kwargs: dict | None = None) -> None:
+                 setup_kwargs: dict | None = None, skip_idle_ticks: bool = True) -> None:
         self.scenario = scenario
         self.context = context
         self.name = name or scenario.name
@@ -61,6 +60,8 @@ class ScenarioRunner:
         self.setup_kwargs = setup_kwargs or {}
         self.root: py_trees.behaviour.Behaviour | None = None
         self.ticks = 0
+        #: step-based mode: do not tick while only waits run (see executor.runtime.quiescence)
+        self.skip_idle_ticks = skip_idle_ticks
 
     # -- phases ------------------------------------------------------------------------------------
 
@@ -82,18 +83,7 @@ class ScenarioRunner:
         simulation = self.simulation
         observers = self.observers
         if simulation is not None:
-            clock = self.context.clock
-            step = simulation.step
-            advance = clock.advance
-            while True:
-                step()
-                advance()
-                root.tick_once()
-                self.ticks += 1
-                for observe in observers:
-                    observe(root)
-                if root.status is not Status.RUNNING:
-                    return root.status
+            return self._step_loop(root, simulation, observers)
         period = self.tick_period
         next_tick = time.monotonic()
         while True:
@@ -109,6 +99,34 @@ class ScenarioRunner:
                 time.sleep(delay)
             else:
                 next_tick = time.monotonic()
+
+    def _step_loop(self, root, simulation, observers) -> Status:
+        """Step-based: one ``step()`` per ``dt``; the tree is ticked whenever a tick can matter.
+
+        Between ticks in which only time/event/condition waits run, nothing can change before the
+        earliest deadline (:func:`~executor.runtime.quiescence.next_wake`), so the simulation is
+        stepped without ticking until then — the same result as ticking every step.
+        """
+        from executor.runtime.quiescence import next_wake
+
+        clock = self.context.clock
+        step = simulation.step
+        advance = clock.advance
+        now = clock.now
+        wake = -1.0
+        while True:
+            step()
+            advance()
+            if now() < wake:
+                continue
+            root.tick_once()
+            self.ticks += 1
+            for observe in observers:
+                observe(root)
+            if root.status is not Status.RUNNING:
+                return root.status
+            if self.skip_idle_ticks:
+                wake = next_wake(root)
 
     def _teardown(self) -> None:
         if self.root is None:
@@ -146,6 +164,7 @@ class ScenarioRunner:
         except ScenarioEnd as end:
             result.passed = end.success
             result.message = "" if end.success else end.message
+            _mark_path(end.behaviour, Status.SUCCESS if end.success else Status.FAILURE)
         except (Aborted, KeyboardInterrupt) as exc:
             signum = exc.signum if isinstance(exc, Aborted) else 2
             result.message = "aborted"
@@ -168,6 +187,13 @@ class ScenarioRunner:
         if signum:
             raise RunAborted(result, signum)
         return result
+
+
+def _mark_path(behaviour, status: Status) -> None:
+    """Show the behaviour that ended the scenario, and the composites above it, with the end status."""
+    while behaviour is not None:
+        behaviour.status = status
+        behaviour = behaviour.parent
 
 
 class RunAborted(Exception):  # noqa: N818 - carries the recorded result out of the loop

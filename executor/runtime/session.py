@@ -12,7 +12,6 @@ import os
 import signal
 from collections.abc import Callable
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.external_methods import set_directories
@@ -22,24 +21,26 @@ from executor.runtime.results import ScenarioResult
 from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments
 
 
-@dataclass
 class SessionOptions:
     """How to run: tick period (wall clock), simulation, observers (live view), directories."""
 
-    tick_period: float = 0.1
-    simulation: object | None = None
-    input_dir: str | None = None
-    output_root: str | None = None
-    observer_factory: Callable[[str], list] | None = None
-    debug: bool = False
+    def __init__(self, tick_period: float = 0.1, simulation: object | None = None, input_dir: str | None = None,
+                 output_root: str | None = None, observer_factory: Callable[[str], list] | None = None,
+                 debug: bool = False) -> None:
+        self.tick_period = tick_period
+        self.simulation = simulation
+        self.input_dir = input_dir
+        self.output_root = output_root
+        self.observer_factory = observer_factory
+        self.debug = debug
 
 
-@dataclass
 class SessionOutcome:
     """All recorded results; ``aborted`` is the signal number when a signal ended the session."""
 
-    results: list[ScenarioResult] = field(default_factory=list)
-    aborted: int = 0
+    def __init__(self) -> None:
+        self.results: list[ScenarioResult] = []
+        self.aborted = 0
 
     @property
     def passed(self) -> bool:

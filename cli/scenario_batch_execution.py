@@ -1,0 +1,252 @@
+"""``scenario_batch_execution``: run every scenario file of a folder as a job of a durable queue.
+
+Thin click commands: options are parsed here, the work is done by :mod:`executor.batch`, and errors
+become one line on stderr and an exit code (a traceback only with ``-d/--debug``).
+
+    scenario_batch_execution -i DIR -o OUT [options] -- CMD … {SCENARIO} … {OUTPUT_DIR} …
+    scenario_batch_execution worker|status|report --store URL …
+
+The first argument selects a subcommand only when it is exactly ``worker``, ``status`` or ``report``,
+so the seed command line works unchanged. Exit codes: 0 every job passed · 1 a job did not pass, or
+an error · 2 usage error · 130/143 interrupted by SIGINT/SIGTERM.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+
+import click
+
+from executor.batch.errors import BatchError
+from store.database import StoreError
+
+PROG = "scenario_batch_execution"
+EXIT_USAGE = 2
+CONTEXT = {"help_option_names": ["-h", "--help"]}
+
+
+class JobsType(click.ParamType):
+    """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs."""
+
+    name = "N|auto"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, int):
+            return value
+        if str(value).lower() == "auto":
+            return os.cpu_count() or 1
+        try:
+            number = int(value)
+        except ValueError:
+            self.fail(f"{value!r} is neither a number nor 'auto'", param, ctx)
+        if number < 1:
+            self.fail(f"{number} must be at least 1", param, ctx)
+        return number
+
+
+def _store_option(func):
+    return click.option("--store", "store_url", metavar="URL", envvar="SCENARIO_STORE",
+                        help="SQLAlchemy URL of the store (default: $SCENARIO_STORE, else "
+                             "./.scenario_store.db).")(func)
+
+
+def _debug_option(func):
+    return click.option("-d", "--debug", is_flag=True, help="Show tracebacks of errors.")(func)
+
+
+def _open_store(url):
+    from store.queue import QueueStore
+
+    return QueueStore.open(url)
+
+
+@click.command(context_settings={**CONTEXT, "allow_interspersed_args": False})
+@click.option("-i", "--input-dir", type=click.Path(file_okay=False), help="Folder with the .sce/.osc files.")
+@click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
+              help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
+@click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
+              help="Jobs run in parallel ('auto': one per CPU).")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S",
+              help="Seconds a job may run; then its process group gets SIGTERM, then SIGKILL.")
+@click.option("--grace", type=click.FloatRange(min=0), default=5.0, show_default=True, metavar="S",
+              help="Seconds between SIGTERM/SIGINT and SIGKILL.")
+@click.option("--retries", type=click.IntRange(min=0), default=0, show_default=True, metavar="K",
+              help="Repeat a job up to K times after an infrastructure error (no result, signal, timeout).")
+@click.option("--resume", is_flag=True, help="Finish the latest unfinished batch of this output folder.")
+@click.option("--shard", metavar="i/N", help="Run only the i-th of N subsets (stable hash of file content).")
+@click.option("--halt-on-failure", is_flag=True, help="Start no new job after the first job that did not pass.")
+@click.option("-r", "--ignore-process-return-value", "ignore_rc", is_flag=True,
+              help="Judge a job by its test.xml alone.")
+@click.option("--post-run", multiple=True, metavar="CMD", help="Run 'CMD <job output folder>' after each job.")
+@click.option("--enqueue-only", is_flag=True, help="Put the jobs into the (shared) store; 'worker' runs them.")
+@click.option("--lease", type=click.FloatRange(min=0.2), default=60.0, show_default=True, metavar="S",
+              help="Seconds a job is held without a heartbeat before another worker may take it.")
+@_store_option
+@_debug_option
+@click.argument("command", nargs=-1, type=click.UNPROCESSED)
+def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
+                ignore_rc, post_run, enqueue_only, lease, store_url, debug, command):
+    """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
+
+    Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
+    """
+    from executor.batch import runner
+    from executor.batch.inputs import Shard
+    from executor.batch.progress import make_reporter
+    from store.jobs import BatchOptions
+
+    if not resume and input_dir is None:
+        raise click.UsageError("missing -i/--input-dir")
+    request = runner.BatchRequest(
+        input_dir=input_dir, output_dir=runner.output_folder(output_dir), command=tuple(command),
+        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
+                             ignore_return_value=ignore_rc, halt_on_failure=halt_on_failure, grace=grace),
+        shard=Shard.parse(shard) if shard else None)
+    store = _open_store(store_url)
+    try:
+        if resume:
+            batch = runner.resume_batch(store, request.output_dir, request.command)
+        else:
+            batch = runner.create_batch(store, request, mode="shared" if enqueue_only else "local")
+        if enqueue_only:
+            count = sum(store.counts(batch.id).values())
+            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
+                       f"'{PROG} worker --store URL' on each host")
+            return 0
+        counts, signum = runner.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        report = os.path.join(batch.output_dir, runner.REPORT_FILE)
+        line = runner.summary_line(batch, counts, report)
+        if signum is not None:
+            line += "; interrupted, finish with --resume"
+        click.echo(line)
+        return runner.exit_code(counts, signum)
+    finally:
+        store.close()
+
+
+@click.command(context_settings=CONTEXT)
+@_store_option
+@click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
+              help="Jobs this worker runs in parallel ('auto': one per CPU).")
+@click.option("--batch", "batch_id", type=int, help="Only this batch (default: every shared batch).")
+@click.option("-o", "--output-root", type=click.Path(file_okay=False),
+              help="Put job folders here instead of the batch's output folder.")
+@click.option("--lease", type=click.FloatRange(min=0.2), default=60.0, show_default=True, metavar="S",
+              help="Seconds a job is held without a heartbeat.")
+@click.option("--poll", type=click.FloatRange(min=0.01), default=1.0, show_default=True, metavar="S",
+              help="Seconds between looks at an empty queue.")
+@click.option("--wait", "wait_for_work", is_flag=True, help="Keep waiting for new batches (a long-lived pod).")
+@_debug_option
+def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_for_work, debug):
+    """Run queued jobs of the shared store until none is left."""
+    from executor.batch.progress import PlainReporter
+    from executor.batch.runner import EXIT_INTERRUPTED, run_worker
+    from executor.batch.worker import WorkerSettings
+
+    store = _open_store(store_url)
+    try:
+        if batch_id is not None:
+            store.batch(batch_id)
+        settings = WorkerSettings(slots=slots, batch_id=batch_id, lease=lease, poll=poll,
+                                  output_root=os.path.abspath(output_root) if output_root else None,
+                                  wait_for_work=wait_for_work, cwd=os.getcwd())
+        summary, signum = run_worker(store, settings, PlainReporter())
+    finally:
+        store.close()
+    if summary.nothing_to_do:
+        click.echo("nothing to do: no queued or running job in the store")
+    else:
+        done = ", ".join(f"{n} {s.value}" for s, n in sorted(summary.verdicts.items())) or "no job finished"
+        click.echo(f"worker done: {done}")
+    return EXIT_INTERRUPTED.get(signum, 0) if signum is not None else 0
+
+
+def _pick_batch(store, batch_id):
+    if batch_id is not None:
+        return store.batch(batch_id)
+    batch = store.latest_batch()
+    if batch is None:
+        raise BatchError(f"the store {store.url} holds no batch")
+    return batch
+
+
+@click.command(context_settings=CONTEXT)
+@_store_option
+@click.option("--batch", "batch_id", type=int, help="Batch to show (default: the latest).")
+@_debug_option
+def status_command(store_url, batch_id, debug):
+    """Show jobs per state, running jobs per worker and host, and an ETA."""
+    from executor.batch.status import render, snapshot
+
+    store = _open_store(store_url)
+    try:
+        render(snapshot(store, _pick_batch(store, batch_id)), sys.stdout)
+    finally:
+        store.close()
+    return 0
+
+
+@click.command(context_settings=CONTEXT)
+@_store_option
+@click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
+@click.option("-o", "--output", default="test.xml", show_default=True, type=click.Path(dir_okay=False),
+              help="File for the merged JUnit report.")
+@_debug_option
+def report_command(store_url, batch_id, output, debug):
+    """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
+    from executor.batch import runner
+
+    store = _open_store(store_url)
+    try:
+        batch = _pick_batch(store, batch_id)
+        counts = runner.write_batch_report(store, batch, output)
+    finally:
+        store.close()
+    click.echo(runner.summary_line(batch, counts, output))
+    return runner.exit_code(counts)
+
+
+SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
+
+
+def _fail(message: str, code: int) -> int:
+    click.echo(f"{PROG}: error: {message}", err=True)
+    return code
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point: dispatch to a subcommand or the batch run, map errors to exit codes."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    command, prog = run_command, PROG
+    if args and args[0] in SUBCOMMANDS:
+        command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
+        args = args[1:]
+    options = args[:args.index("--")] if "--" in args else args
+    debug = "-d" in options or "--debug" in options
+    try:
+        code = command.main(args, prog_name=prog, standalone_mode=False)
+    except click.exceptions.Abort:
+        code = 130
+    except click.UsageError as exc:
+        code = _fail(exc.format_message(), EXIT_USAGE)
+    except click.ClickException as exc:
+        code = _fail(exc.format_message(), exc.exit_code)
+    except (BatchError, StoreError) as exc:
+        if debug:
+            traceback.print_exc()
+        code = _fail(str(exc), 1)
+    except OSError as exc:
+        if debug:
+            traceback.print_exc()
+        code = _fail(f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc), 1)
+    except Exception as exc:  # noqa: BLE001 - the last line of defence: one line, traceback with -d
+        if debug:
+            traceback.print_exc()
+        code = _fail(f"internal error: {exc!r} (run with -d for the traceback)", 1)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+if __name__ == "__main__":
+    main()

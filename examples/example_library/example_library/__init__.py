@@ -1,0 +1,1 @@
+"""Example action library for scenario_execution (see README.md)."""

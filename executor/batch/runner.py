@@ -1,0 +1,144 @@
+"""What the command line calls: create or resume a batch, run it with local workers, write the report.
+
+The single-host run is nothing more than the shared queue: a batch in the store (an SQLite file by
+default), a :class:`Worker` scoped to it, and the merged report built from the store's results.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from executor.batch.errors import BatchError, NothingToResume
+from executor.batch.inputs import Shard, check_command, discover, job_specs
+from executor.batch.junit_merge import merged_report, write_report
+from executor.batch.progress import Reporter
+from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
+from store.jobs import Batch, BatchOptions
+from store.queue import DEFAULT_LEASE, QueueStore
+from store.states import JobState
+from store.variant_lookup import variant_assignments
+
+REPORT_FILE = "test.xml"
+
+#: Exit codes of an interrupted run: 128 + the signal number, as shells report it.
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+@dataclass(frozen=True)
+class BatchRequest:
+    """A batch as asked for on the command line."""
+
+    input_dir: str | None
+    output_dir: str
+    command: tuple[str, ...]
+    options: BatchOptions
+    shard: Shard | None = None
+
+
+def output_folder(path: str) -> str:
+    """The absolute output folder (created with its parents), the key under which a batch is resumed."""
+    folder = Path(path).expanduser().resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    return str(folder)
+
+
+def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local") -> Batch:
+    """Discover the scenario files, keep the shard's share, and enqueue one job per file."""
+    if request.input_dir is None:
+        raise BatchError("-i/--input-dir is required (except with --resume)")
+    files = discover(request.input_dir)
+    check_command(request.command, require_executable=mode == "local")
+    specs = job_specs(files, request.shard)
+    options = request.options
+    if request.shard is not None:
+        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
+    return store.create_batch(mode=mode, input_dir=str(Path(request.input_dir).resolve()),
+                              output_dir=request.output_dir, host=socket.gethostname(),
+                              command=request.command, options=options, specs=specs)
+
+
+def resume_batch(store: QueueStore, output_dir: str, command: Sequence[str]) -> Batch:
+    """The latest batch for ``output_dir``, its cancelled jobs queued again; the command must match."""
+    batch = store.latest_batch(output_dir=output_dir)
+    if batch is None:
+        raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url} to resume")
+    if command and tuple(command) != batch.command:
+        raise BatchError(f"--resume: the batch was started with a different command: {' '.join(batch.command)}")
+    store.resume(batch.id)
+    return batch
+
+
+@contextmanager
+def interrupts_stop(worker: Worker) -> Iterator[list[int]]:
+    """While inside, SIGINT/SIGTERM stop the worker (a second SIGINT kills the children at once)."""
+    received: list[int] = []
+
+    def handler(signum, _frame):
+        worker.stop(force=bool(received) and signum == signal.SIGINT)
+        received.append(signum)
+
+    previous = {sig: signal.signal(sig, handler) for sig in EXIT_INTERRUPTED}
+    try:
+        yield received
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
+               total: int | None = None, done: int = 0) -> tuple[WorkerSummary, int | None]:
+    """Run a worker until it runs out of work or is interrupted; returns its summary and the signal."""
+    worker = Worker(store, settings, reporter)
+    reporter.begin(total, done)
+    try:
+        with interrupts_stop(worker) as received:
+            summary = worker.run()
+    finally:
+        reporter.end()
+    return summary, (received[0] if received else None)
+
+
+def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *,
+              lease: float = DEFAULT_LEASE) -> tuple[dict[JobState, int], int | None]:
+    """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report."""
+    counts = store.counts(batch.id)
+    total = sum(counts.values())
+    done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
+    settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
+                              echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd())
+    _summary, signum = run_worker(store, settings, reporter, total, done)
+    counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE)
+    return counts, signum
+
+
+def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str]) -> dict[JobState, int]:
+    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts."""
+    jobs = list(store.iter_results(batch.id))
+    assignments = variant_assignments(store.engine, [j.scenario_path for j in jobs])
+    write_report(path, merged_report(jobs, assignments))
+    return store.counts(batch.id)
+
+
+def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
+    """0 only when every job of the batch passed; 128+signal when interrupted."""
+    if signum is not None:
+        return EXIT_INTERRUPTED.get(signum, 128 + int(signum))
+    total = sum(counts.values())
+    return 0 if total and counts[JobState.PASSED] == total else 1
+
+
+def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:
+    """One line saying how the batch fared."""
+    total = sum(counts.values())
+    parts = [f"{counts[s]} {s.value}" for s in JobState if counts[s]]
+    text = f"batch {batch.id}: {total} job(s): " + ", ".join(parts or ["none"])
+    if report:
+        text += f"; report {report}"
+    return text

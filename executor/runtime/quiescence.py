@@ -1,0 +1,97 @@
+"""When can ticking be skipped? The earliest scenario time at which a tick could change anything.
+
+In step-based mode a tick in which every running leaf is only waiting for time (``wait elapsed``),
+for an event not yet emitted, or for a condition over variables that is false now does nothing: no
+action runs, so no variable or event changes, and the waits stay RUNNING until their deadline. The tick loop still calls
+``simulation.step()`` once per ``dt`` but ticks the tree only from :func:`next_wake` on — the
+scenario behaves exactly as if it were ticked every step, only faster.
+
+Anything else running — an action (it may read the simulation), a decorator whose child has ended
+and will be started again (``repeat``, ``retry``, ``success_is_running`` …), a composite we do not
+know — means "tick at the next step" (:data:`NOW`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import py_trees
+from py_trees.common import ParallelPolicy, Status
+
+from coverage_engine.model import (
+    Const,
+    FieldOf,
+    MakeList,
+    MakeStruct,
+    Operation,
+    VariableRef,
+)
+from executor.runtime import behaviours
+from executor.runtime.modifiers import ClockTimeout
+
+NOW = -math.inf
+NEVER = math.inf
+
+_PURE_DECORATORS = (py_trees.decorators.Inverter, py_trees.decorators.Repeat, py_trees.decorators.Retry,
+                    py_trees.decorators.FailureIsRunning, py_trees.decorators.FailureIsSuccess,
+                    py_trees.decorators.RunningIsFailure, py_trees.decorators.RunningIsSuccess,
+                    py_trees.decorators.SuccessIsFailure, py_trees.decorators.SuccessIsRunning)
+
+
+def is_pure(expr) -> bool:
+    """True when computing ``expr`` depends on variables only (no external method)."""
+    if isinstance(expr, (Const, VariableRef)):
+        return True
+    if isinstance(expr, Operation):
+        return all(is_pure(o) for o in expr.operands)
+    if isinstance(expr, FieldOf):
+        return is_pure(expr.target)
+    if isinstance(expr, MakeList):
+        return all(is_pure(i) for i in expr.items)
+    if isinstance(expr, MakeStruct):
+        return all(is_pure(v) for _, v in expr.members)
+    return False
+
+
+def next_wake(node: py_trees.behaviour.Behaviour) -> float:
+    """Earliest clock time at which ticking ``node`` (RUNNING) could make a difference.
+
+    The contract: for every clock time ``t < next_wake(root)`` a tick is a no-op.
+    """
+    kind = type(node)
+    if kind is behaviours.WaitElapsed:
+        return node.finish
+    if kind is behaviours.WaitEvent:
+        # emitted later in the same tick (by a branch ticked after this one): seen next tick
+        return NOW if node.event in node.context.events else NEVER
+    if kind is behaviours.WaitCondition:
+        if not node.pure:
+            return NOW
+        try:
+            return NOW if node.context.value(node.condition) else NEVER
+        except Exception:  # noqa: BLE001 - let the next tick report it
+            return NOW
+    if kind is py_trees.composites.Sequence:
+        child = node.current_child
+        return next_wake(child) if child is not None and child.status is Status.RUNNING else NOW
+    if kind is py_trees.composites.Parallel:
+        synchronise = isinstance(node.policy, ParallelPolicy.SuccessOnAll) and node.policy.synchronise
+        wake = NEVER
+        for child in node.children:
+            if child.status is Status.RUNNING:
+                wake = min(wake, next_wake(child))
+            elif not (synchronise and child.status is Status.SUCCESS):
+                return NOW
+            if wake == NOW:
+                return NOW
+        return wake
+    if kind is ClockTimeout:
+        child = node.decorated
+        if child.status is not Status.RUNNING:
+            return NOW
+        # the timeout fires once the clock is strictly past its deadline
+        return min(math.nextafter(node.finish, math.inf), next_wake(child))
+    if kind in _PURE_DECORATORS:
+        child = node.decorated
+        return next_wake(child) if child.status is Status.RUNNING else NOW
+    return NOW

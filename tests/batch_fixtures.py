@@ -1,0 +1,155 @@
+"""Shared helpers of the batch and queue tests: a scriptable child, the real CLI, fresh stores.
+
+The child (:data:`CHILD`) reads directives from the scenario file it is given (``key=value`` lines):
+``sleep``, ``exit``, ``xml`` (pass, fail, error, garbage, none, empty, two), ``print``, ``output_mb``,
+``hang`` (ignore SIGTERM and sleep), ``grandchild`` (start a sleeping grandchild in its group),
+``fail_first`` (no result on the first attempt), so each test states its jobs as data.
+Every child that gets to its end appends ``<name> <pid>`` to the ledger named by ``$BATCH_LEDGER``.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import uuid
+from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
+BIN = Path(sys.executable).parent
+CLI = str(BIN / "scenario_batch_execution")
+
+CHILD = r'''
+import os, signal, subprocess, sys, time
+scenario, out = sys.argv[1], sys.argv[2]
+name = os.path.splitext(os.path.basename(scenario))[0]
+spec = {}
+for line in open(scenario):
+    if "=" in line:
+        key, value = line.strip().split("=", 1)
+        spec[key] = value
+os.makedirs(out, exist_ok=True)
+print("start", name, flush=True)
+if "print" in spec:
+    print(spec["print"], flush=True)
+if spec.get("fail_first") and not os.path.exists(os.path.join(out, "first_attempt_done")):
+    open(os.path.join(out, "first_attempt_done"), "w").close()
+    print("first attempt: no result", flush=True)
+    sys.exit(3)
+if "grandchild" in spec:
+    code = "import os, signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(1000)"
+    grand = subprocess.Popen([sys.executable, "-S", "-c", code])
+    open(os.path.join(out, "grandchild.pid"), "w").write(str(grand.pid))
+if "output_mb" in spec:
+    block = b"x" * 1023 + b"\n"
+    for _ in range(int(spec["output_mb"]) * 1024):
+        sys.stdout.buffer.write(block)
+    sys.stdout.flush()
+if "hang" in spec:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    time.sleep(1000)
+if "sleep" in spec:
+    time.sleep(float(spec["sleep"]))
+xml = spec.get("xml", "pass")
+docs = {
+    "pass": '<testsuite tests="1"><testcase classname="c" name="sc" time="0.01"/></testsuite>',
+    "fail": '<testsuite tests="1"><testcase classname="c" name="sc"><failure message="it failed">why</failure></testcase></testsuite>',
+    "error": '<testsuite tests="1"><testcase classname="c" name="sc"><error message="it erred"/></testcase></testsuite>',
+    "two": '<testsuites><testsuite tests="2"><testcase classname="c" name="first"/><testcase classname="c" name="second"><failure message="f"/></testcase></testsuite></testsuites>',
+    "garbage": '<testsuite><testcase name="broken"',
+    "empty": '<testsuite tests="0"></testsuite>',
+}
+if xml in docs:
+    with open(os.path.join(out, "test.xml"), "w") as handle:
+        handle.write(docs[xml])
+ledger = os.environ.get("BATCH_LEDGER")
+if ledger:
+    fd = os.open(ledger, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    os.write(fd, ("%s %d\n" % (name, os.getpid())).encode())
+    os.close(fd)
+sys.exit(int(spec.get("exit", "0")))
+'''
+
+
+def write_child(folder: Path) -> Path:
+    """Write the scriptable child into ``folder``; returns its path."""
+    path = folder / "child.py"
+    path.write_text(CHILD)
+    return path
+
+
+def child_command(child: Path) -> list[str]:
+    """The launch command running the child (``python -S`` starts in a few milliseconds)."""
+    return [sys.executable, "-S", str(child), "{SCENARIO}", "{OUTPUT_DIR}"]
+
+
+def write_scenarios(folder: Path, specs: dict[str, str], suffix: str = ".sce") -> Path:
+    """Create ``folder`` with one scenario file per name, its text the child's directives."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in specs.items():
+        (folder / f"{name}{suffix}").write_text(text + "\n")
+    return folder
+
+
+def cli_env(tmp_path: Path, **extra: str) -> dict[str, str]:
+    """Environment for the CLI: plain output, a store in ``tmp_path``, a ledger file."""
+    env = dict(os.environ)
+    env.pop("SCENARIO_STORE", None)
+    env.update({"NO_COLOR": "1", "BATCH_LEDGER": str(tmp_path / "ledger.txt"), "PYTHONUNBUFFERED": "1"})
+    env.update(extra)
+    return env
+
+
+def run_cli(args: list[str], cwd: Path, env: dict[str, str] | None = None,
+            timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run the real console script and capture its output."""
+    return subprocess.run([CLI, *args], cwd=cwd, env=env or cli_env(cwd), capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def start_cli(args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.Popen:
+    """Start the real console script in the background (for kill and interrupt tests)."""
+    return subprocess.Popen([CLI, *args], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True)
+
+
+def ledger(tmp_path: Path) -> Counter:
+    """How often each job's child reached its end."""
+    path = tmp_path / "ledger.txt"
+    if not path.exists():
+        return Counter()
+    return Counter(line.split()[0] for line in path.read_text().splitlines() if line.strip())
+
+
+def sqlite_url(tmp_path: Path) -> str:
+    return f"sqlite:///{tmp_path / 'store.db'}"
+
+
+@pytest.fixture
+def pg_url() -> Iterator[str]:
+    """A fresh PostgreSQL database for one test, dropped afterwards."""
+    import psycopg
+
+    name = f"test_batch_{uuid.uuid4().hex[:12]}"
+    try:
+        admin = psycopg.connect(PG_ADMIN_URL, autocommit=True, connect_timeout=5)
+    except psycopg.OperationalError as exc:  # the CI machine runs one; a missing server is a failure
+        pytest.fail(f"PostgreSQL at {PG_ADMIN_URL} is not reachable: {exc}")
+    with admin:
+        admin.execute(f'CREATE DATABASE "{name}"')
+        try:
+            yield f"postgresql+psycopg://postgres@127.0.0.1:5432/{name}"
+        finally:
+            admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def store_url(request, tmp_path) -> str:
+    """The same test on a fresh SQLite file and on a fresh PostgreSQL database."""
+    if request.param == "sqlite":
+        return sqlite_url(tmp_path)
+    return request.getfixturevalue("pg_url")

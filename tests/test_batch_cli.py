@@ -1,0 +1,246 @@
+"""The batch command through its real console script, with real children and a real SQLite store."""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
+
+
+def _suites(path: Path) -> dict[str, ET.Element]:
+    root = ET.parse(path).getroot()
+    assert root.tag == "testsuites"
+    return {s.get("name"): s for s in root.iter("testsuite")}
+
+
+def _props(suite: ET.Element) -> dict[str, str]:
+    return {p.get("name"): p.get("value") for p in suite.iter("property")}
+
+
+def _batch(tmp_path: Path, specs: dict[str, str], *options: str, env=None, timeout=120):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", specs)
+    return run_cli(["-i", "in", "-o", "results", *options, "--", *child_command(child)], tmp_path,
+                   env=env or cli_env(tmp_path), timeout=timeout)
+
+
+def test_seed_command_line_verdicts_and_merged_report(tmp_path):
+    result = _batch(tmp_path, {"a_ok": "print=hello-a", "b_fail": "xml=fail\nexit=1", "c_ok": ""})
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "hello-a" in result.stdout                      # -j 1 shows the child's output live
+    assert result.stdout.index("start a_ok") < result.stdout.index("start b_fail") < result.stdout.index(
+        "start c_ok")
+    root = ET.parse(tmp_path / "results" / "test.xml").getroot()
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("3", "1", "0")
+    assert [c.get("name") for c in root.iter("testcase")] == ["a_ok", "b_fail", "c_ok"]
+    suites = _suites(tmp_path / "results" / "test.xml")
+    assert list(suites) == ["a_ok", "b_fail", "c_ok"]
+    props = _props(suites["b_fail"])
+    assert props["scenario_file"] == str((tmp_path / "in" / "b_fail.sce").resolve())
+    assert props["attempts"] == "1" and props["exit_code"] == "1" and props["testcase"] == "sc"
+    failure = suites["b_fail"].find("testcase/failure")
+    assert failure is not None and failure.get("message") == "it failed"
+    for name in ("a_ok", "b_fail", "c_ok"):
+        assert (tmp_path / "results" / name / "test.xml").exists()
+        assert f"start {name}" in (tmp_path / "results" / name / "log.txt").read_text()
+
+
+def test_all_passed_exit_zero_and_osc_files_too(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"x1": ""}, suffix=".osc")
+    write_scenarios(tmp_path / "in", {"x2": ""}, suffix=".sce")
+    (tmp_path / "in" / "notes.txt").write_text("not a scenario")
+    result = run_cli(["-i", "in", "-o", "deep/results", "-j", "2", "--", *child_command(child)], tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert list(_suites(tmp_path / "deep/results/test.xml")) == ["x1", "x2"]
+
+
+def test_user_errors_are_one_line_without_traceback(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a": ""})
+    (tmp_path / "empty").mkdir()
+    cases = [
+        ["-i", "in", "-o", "r", "--", sys.executable, str(child), "{SCENARIO}"],          # no {OUTPUT_DIR}
+        ["-i", "in", "-o", "r", "--", sys.executable, str(child), "in/a.sce", "x"],       # no placeholders
+        ["-i", "empty", "-o", "r", "--", *child_command(child)],                          # no scenario files
+        ["-i", "missing", "-o", "r", "--", *child_command(child)],
+        ["-i", "in", "-o", "r"],                                                          # no command
+        ["-i", "in", "-o", "r", "--shard", "3/2", "--", *child_command(child)],
+        ["-i", "in", "-o", "r", "-j", "zero", "--", *child_command(child)],
+        ["-i", "in", "-o", "r", "--bogus", "--", *child_command(child)],
+        ["-i", "in", "-o", "r", "--", "no-such-program-xyz", "{SCENARIO}", "{OUTPUT_DIR}"],
+        ["-o", "r", "--resume", "--", *child_command(child)],                             # nothing to resume
+    ]
+    for args in cases:
+        result = run_cli(args, tmp_path)
+        assert result.returncode != 0, args
+        assert "Traceback" not in result.stderr + result.stdout, args
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and "error" in lines[0], (args, result.stderr)
+    assert not (tmp_path / "ledger.txt").exists()        # nothing ran
+
+
+def test_missing_garbage_empty_xml_and_big_output(tmp_path):
+    result = _batch(tmp_path, {"big": "output_mb=50", "garbage": "xml=garbage", "empty": "xml=empty",
+                               "none": "xml=none", "two": "xml=two"}, "-j", "3")
+    assert result.returncode == 1
+    suites = _suites(tmp_path / "results" / "test.xml")
+    assert list(suites) == ["big", "empty", "garbage", "none", "two"]
+    assert _props(suites["big"])["status"] == "passed"
+    assert (tmp_path / "results/big/log.txt").stat().st_size > 50 * 1024 * 1024
+    for name in ("garbage", "none", "empty"):
+        suite = suites[name]
+        assert (suite.get("tests"), suite.get("errors")) == ("1", "1"), name
+        error = suite.find("testcase/error")
+        assert "exit code 0" in error.get("message") and f"start {name}" in (error.text or "")
+    assert [c.get("name") for c in suites["two"].iter("testcase")] == ["first", "second"]
+    assert suites["two"].get("failures") == "1"
+    root = ET.parse(tmp_path / "results" / "test.xml").getroot()
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("6", "1", "3")
+
+
+def test_return_value_and_ignore_flag(tmp_path):
+    specs = {"rc3": "exit=3"}
+    assert _batch(tmp_path, specs).returncode == 1
+    suite = _suites(tmp_path / "results" / "test.xml")["rc3"]
+    assert suite.get("failures") == "1" and "exit code 3" in suite.find("testcase/failure").get("message")
+    again = run_cli(["-i", "in", "-o", "results", "-r", "--", *child_command(tmp_path / "child.py")], tmp_path)
+    assert again.returncode == 0, again.stdout
+
+
+def test_timeout_kills_whole_process_group(tmp_path):
+    start = time.monotonic()
+    result = _batch(tmp_path, {"hangs": "grandchild=1\nhang=1", "quick": ""},
+                    "--timeout", "1", "--grace", "0.5", "-j", "2")
+    assert time.monotonic() - start < 20
+    assert result.returncode == 1
+    suite = _suites(tmp_path / "results" / "test.xml")["hangs"]
+    error = suite.find("testcase/error")
+    assert error.get("type") == "timeout" and _props(suite)["status"] == "timeout"
+    grandchild = int((tmp_path / "results/hangs/grandchild.pid").read_text())
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline:
+        try:
+            os.kill(grandchild, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the grandchild survived the timeout")
+
+
+def test_retries_only_infrastructure_errors_and_keep_logs(tmp_path):
+    result = _batch(tmp_path, {"flaky": "fail_first=1", "failing": "xml=fail\nexit=1"}, "--retries", "2")
+    assert result.returncode == 1
+    suites = _suites(tmp_path / "results" / "test.xml")
+    assert _props(suites["flaky"])["status"] == "passed" and _props(suites["flaky"])["attempts"] == "2"
+    assert _props(suites["failing"])["attempts"] == "1"
+    assert ledger(tmp_path) == {"flaky": 1, "failing": 1}
+    assert "first attempt: no result" in (tmp_path / "results/flaky/log.1.txt").read_text()
+    assert "first attempt" not in (tmp_path / "results/flaky/log.txt").read_text()
+
+
+def test_post_run_hooks_run_per_job_and_failures_do_not_stop(tmp_path):
+    hook = tmp_path / "hook.py"
+    hook.write_text("import sys\nopen(sys.argv[1] + '/../calls.txt', 'a').write(sys.argv[1] + '\\n')\n")
+    bad = tmp_path / "bad.py"
+    bad.write_text("import sys\nsys.exit(4)\n")
+    result = _batch(tmp_path, {"a": "", "b": ""}, "--post-run", f"{sys.executable} {hook}",
+                    "--post-run", f"{sys.executable} {bad}")
+    assert result.returncode == 0, result.stdout + result.stderr
+    calls = (tmp_path / "results/calls.txt").read_text().splitlines()
+    assert [Path(c).name for c in calls] == ["a", "b"]
+    assert result.stderr.count("exit code 4") == 2
+
+
+def test_shards_partition_the_files(tmp_path):
+    specs = {f"s{i:02d}": f"print=file {i}" for i in range(12)}
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", specs)
+    seen: list[str] = []
+    for index in (1, 2, 3):
+        result = run_cli(["-i", "in", "-o", f"shard{index}", "--shard", f"{index}/3", "--",
+                          *child_command(child)], tmp_path)
+        assert result.returncode == 0, result.stderr
+        names = list(_suites(tmp_path / f"shard{index}" / "test.xml"))
+        again = run_cli(["-i", "in", "-o", f"again{index}", "--shard", f"{index}/3", "--",
+                         *child_command(child)], tmp_path)
+        assert again.returncode == 0 and list(_suites(tmp_path / f"again{index}" / "test.xml")) == names
+        seen += names
+    assert sorted(seen) == sorted(specs)
+
+
+def test_halt_on_failure_starts_nothing_after_a_failure(tmp_path):
+    result = _batch(tmp_path, {"a": "", "b": "xml=fail", "c": "", "d": ""}, "--halt-on-failure")
+    assert result.returncode == 1
+    assert ledger(tmp_path) == {"a": 1, "b": 1}
+    assert list(_suites(tmp_path / "results" / "test.xml")) == ["a", "b"]
+
+
+def test_log_is_written_while_the_child_runs(tmp_path):
+    for jobs in ("1", "2"):
+        child = write_child(tmp_path)
+        write_scenarios(tmp_path / f"in{jobs}", {"slow": "print=early-line\nsleep=3"})
+        proc = start_cli(["-i", f"in{jobs}", "-o", f"r{jobs}", "-j", jobs, "--", *child_command(child)],
+                         tmp_path, cli_env(tmp_path))
+        log = tmp_path / f"r{jobs}" / "slow" / "log.txt"
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and not (log.exists() and "early-line" in log.read_text()):
+            time.sleep(0.05)
+        assert proc.poll() is None, "the line must be in log.txt before the child ends"
+        assert "early-line" in log.read_text()
+        proc.communicate(timeout=30)
+        assert proc.returncode == 0
+
+
+def test_old_summary_kept_until_the_end_and_nothing_deleted(tmp_path):
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "test.xml").write_text('<testsuite tests="2" failures="2"/>')
+    (results / "keep.me").write_text("user file")
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"slow": "sleep=2"})
+    proc = start_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, cli_env(tmp_path))
+    time.sleep(1.0)
+    assert (results / "test.xml").read_text() == '<testsuite tests="2" failures="2"/>'
+    proc.communicate(timeout=30)
+    assert proc.returncode == 0
+    assert list(_suites(results / "test.xml")) == ["slow"]
+    assert (results / "keep.me").read_text() == "user file"
+
+
+def test_variant_assignment_becomes_properties(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"v0": "", "plain": ""})
+    store = tmp_path / "store.db"
+    conn = sqlite3.connect(store)
+    conn.execute("CREATE TABLE variants (id INTEGER PRIMARY KEY, file_path TEXT, assignment TEXT)")
+    conn.execute("INSERT INTO variants (file_path, assignment) VALUES (?, ?)",
+                 (str((tmp_path / "in" / "v0.sce").resolve()), '{"scenario.speed": 5.0, "scenario.name": "a"}'))
+    conn.commit()
+    conn.close()
+    result = run_cli(["-i", "in", "-o", "results", "--store", f"sqlite:///{store}", "--",
+                      *child_command(child)], tmp_path)
+    assert result.returncode == 0, result.stderr
+    suites = _suites(tmp_path / "results" / "test.xml")
+    assert _props(suites["v0"])["variation.scenario.speed"] == "5.0"
+    assert _props(suites["v0"])["variation.scenario.name"] == "a"
+    assert not any(k.startswith("variation.") for k in _props(suites["plain"]))
+
+
+def test_incompatible_store_is_refused(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a": ""})
+    assert run_cli(["-i", "in", "-o", "r", "--", *child_command(child)], tmp_path).returncode == 0
+    conn = sqlite3.connect(tmp_path / ".scenario_store.db")
+    conn.execute("UPDATE store_meta SET schema_version = 99")
+    conn.commit()
+    conn.close()
+    result = run_cli(["-i", "in", "-o", "r", "--", *child_command(child)], tmp_path)
+    assert result.returncode == 1
+    assert "schema version 99" in result.stderr and "Traceback" not in result.stderr

@@ -1,0 +1,105 @@
+"""Crash and interrupt safety: kill -9 or Ctrl-C in the middle of a batch, then ``--resume``."""
+
+from __future__ import annotations
+
+import signal
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
+
+from store.queue import QueueStore
+from store.states import FINAL, JobState
+
+
+def _suite_names(path: Path) -> list[str]:
+    return [s.get("name") for s in ET.parse(path).getroot().iter("testsuite")]
+
+
+def _wait_for_ledger(tmp_path: Path, count: int, proc, timeout: float = 60) -> None:
+    deadline = time.monotonic() + timeout
+    while sum(ledger(tmp_path).values()) < count:
+        assert proc.poll() is None, proc.stdout.read()
+        assert time.monotonic() < deadline, "the batch made no progress"
+        time.sleep(0.02)
+
+
+def _store_jobs(tmp_path: Path):
+    store = QueueStore.open(f"sqlite:///{tmp_path / '.scenario_store.db'}")
+    try:
+        batch = store.latest_batch()
+        return store.jobs(batch.id)
+    finally:
+        store.close()
+
+
+def test_kill_9_mid_batch_then_resume_runs_each_job_once(tmp_path):
+    names = [f"job{i:03d}" for i in range(200)]
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {n: "sleep=0.01" for n in names})
+    env = cli_env(tmp_path)
+    args = ["-i", "in", "-o", "results", "-j", "4", "--", *child_command(child)]
+    proc = start_cli(args, tmp_path, env)
+    _wait_for_ledger(tmp_path, 60, proc)
+    proc.send_signal(signal.SIGKILL)
+    proc.communicate(timeout=10)
+
+    before = _store_jobs(tmp_path)
+    finished_before = {j.name for j in before if j.status in FINAL}
+    assert 40 <= len(finished_before) < 200
+    assert any(j.status is JobState.QUEUED for j in before)
+
+    resumed = run_cli(["-o", "results", "--resume", "-j", "4", "--", *child_command(child)], tmp_path, env)
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+
+    assert sorted(_suite_names(tmp_path / "results" / "test.xml")) == names     # each exactly once
+    runs = ledger(tmp_path)
+    assert set(runs) == set(names)
+    assert all(runs[n] == 1 for n in finished_before), "a finished job ran again"
+    after = _store_jobs(tmp_path)
+    assert all(j.status is JobState.PASSED for j in after)
+    assert all(j.attempts == 1 for j in after if j.name in finished_before)
+
+
+def test_ctrl_c_cancels_writes_partial_report_and_resume_completes(tmp_path):
+    names = [f"s{i:02d}" for i in range(12)]
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {n: "sleep=0.4" for n in names})
+    env = cli_env(tmp_path)
+    proc = start_cli(["-i", "in", "-o", "results", "-j", "2", "--grace", "2", "--",
+                      *child_command(child)], tmp_path, env)
+    _wait_for_ledger(tmp_path, 3, proc)
+    proc.send_signal(signal.SIGINT)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 130, out
+    assert "--resume" in out
+
+    jobs = _store_jobs(tmp_path)
+    finished = [j.name for j in jobs if j.status in FINAL]
+    cancelled = [j.name for j in jobs if j.status is JobState.CANCELLED]
+    assert cancelled, "the running jobs are marked cancelled"
+    assert not any(j.status is JobState.RUNNING for j in jobs)
+    assert _suite_names(tmp_path / "results" / "test.xml") == finished
+
+    resumed = run_cli(["-o", "results", "--resume", "-j", "2", "--", *child_command(child)], tmp_path, env)
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    assert _suite_names(tmp_path / "results" / "test.xml") == names
+    runs = ledger(tmp_path)
+    assert all(runs[n] == 1 for n in finished)
+    for name in cancelled:                                        # the cancelled attempt's log is kept
+        assert (tmp_path / "results" / name / "log.1.txt").exists()
+
+
+def test_resume_of_a_finished_batch_rewrites_the_report(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a": "", "b": "xml=fail"})
+    env = cli_env(tmp_path)
+    assert run_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, env).returncode == 1
+    (tmp_path / "results" / "test.xml").unlink()
+    again = run_cli(["-o", "results", "--resume"], tmp_path, env)
+    assert again.returncode == 1
+    assert _suite_names(tmp_path / "results" / "test.xml") == ["a", "b"]
+    assert ledger(tmp_path) == {"a": 1, "b": 1}
+    other = run_cli(["-o", "results", "--resume", "--", "true", "{SCENARIO}", "{OUTPUT_DIR}"], tmp_path, env)
+    assert other.returncode == 1 and "different command" in other.stderr

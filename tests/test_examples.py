@@ -1,0 +1,94 @@
+"""Every example under examples/ runs as documented (real command, subprocess)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from cli_support import needs_frontend, run_cli
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def names(path: Path) -> list[str]:
+    return [case.get("name") for case in ET.parse(path).getroot().iter("testcase")]
+
+
+def in_order(text: str, *parts: str) -> bool:
+    position = 0
+    for part in parts:
+        position = text.find(part, position)
+        if position < 0:
+            return False
+    return True
+
+
+@needs_frontend
+def test_hello_world(tmp_path):
+    started = time.monotonic()
+    done = run_cli(str(EXAMPLES / "hello_world/hello_world.osc"), "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    assert time.monotonic() - started >= 3.0
+    assert in_order(done.stdout, "Hello World!", "Good Bye!")
+    assert names(tmp_path / "out/test.xml") == ["hello_world"]
+
+
+@needs_frontend
+def test_external_method_from_another_directory(tmp_path):
+    done = run_cli(str(EXAMPLES / "external_method/example_external_method.osc"), cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    lines = [line.rstrip() for line in done.stdout.splitlines()]
+    assert any(line.endswith(" 24") for line in lines) and any(line.endswith(" 120") for line in lines)
+
+
+@needs_frontend
+def test_multiple_scenarios(tmp_path):
+    done = run_cli(str(EXAMPLES / "multiple_scenarios/two_scenarios.osc"), "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    assert in_order(done.stdout, "running first", "shared by every scenario", "running second")
+    assert names(tmp_path / "out/test.xml") == ["first_scenario", "second_scenario"]
+    assert (tmp_path / "out/first_scenario").is_dir() and (tmp_path / "out/second_scenario").is_dir()
+
+
+@needs_frontend
+def test_parameter_override_and_sweep(tmp_path):
+    folder = EXAMPLES / "parameter_override"
+    done = run_cli(str(folder / "parameter_override.osc"), "--scenario-parameter-file",
+                   str(folder / "override.yaml"), cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    assert in_order(done.stdout, "my_val", "{'x': 1.0, 'y': 2.0, 'z': 0.0}")
+    done = run_cli(str(folder / "parameter_override.osc"), "--scenario-parameter-file",
+                   str(folder / "sweep.yaml"), "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    assert in_order(done.stdout, "slow", "medium", "fast")
+    assert names(tmp_path / "out/test.xml") == [f"parameter_override-{i}" for i in range(3)]
+    assert (tmp_path / "out/parameter_override-0").is_dir() and (tmp_path / "out/fast_run").is_dir()
+
+
+@needs_frontend
+def test_step_based_simulation_runs_faster_than_real_time():
+    folder = EXAMPLES / "simulation"
+    started = time.monotonic()
+    done = run_cli("falling_ball.osc", "--simulation", "falling_ball.py:FallingBall", cwd=folder)
+    assert done.returncode == 0, done.stdout
+    assert time.monotonic() - started < 1.5  # 1.5 s of simulated time, no sleeping
+    assert in_order(done.stdout, "SIM reset: height=10.0", "dropping the ball", "1.5 s of simulated time",
+                    "SIM shutdown after 1501 steps")
+
+
+@needs_frontend
+def test_example_library_installed(tmp_path):
+    target = tmp_path / "site"
+    install = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation",
+                              "--target", str(target), str(EXAMPLES / "example_library")],
+                             capture_output=True, text=True, cwd=tmp_path)
+    assert install.returncode == 0, install.stderr
+    scenario = EXAMPLES / "example_library/scenarios/example_library.osc"
+    done = run_cli(str(scenario), "-o", "out", cwd=tmp_path, env={"PYTHONPATH": str(target)})
+    assert done.returncode == 0, done.stdout
+    assert in_order(done.stdout, "custom_action: foo (1/1)", "custom_action: bar (1/2)", "custom_action: bar (2/2)")
+    missing = run_cli(str(scenario), "-n", cwd=tmp_path)  # not installed here: the library is unknown
+    assert missing.returncode != 0 and "Traceback" not in missing.stdout

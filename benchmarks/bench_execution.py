@@ -32,7 +32,6 @@ import time
 from pathlib import Path
 
 REFERENCE = "/tmp/refvenv/bin/scenario_execution"
-STEPS = 10_000
 
 TRIVIAL = """import osc.helpers
 

@@ -1,7 +1,8 @@
 """Resolve a ``do`` body into model behaviours: composites, action calls, waits, emits and modifiers.
 
 Modifiers written among a composite's members (``repeat()`` inside ``serial:``) or in a ``with:``
-block apply to that composite or invocation; several nest in the order written, the first innermost.
+block apply to that composite or invocation; several nest in the order written, the first outermost
+(``retry(3)`` above ``timeout(2s)`` retries the timed-out attempt).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from coverage_engine.errors import ArgumentError, NameLookupError, OscTypeError,
 from coverage_engine.expressions import bind_arguments, coerce, resolve_expression
 from coverage_engine.instances import extract_keep
 from coverage_engine.scope import Scope
-from coverage_engine.types import BOOL, CompoundType, PhysicalType
+from coverage_engine.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
 
 def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:
     """The model behaviour for one member of a ``do`` body."""
@@ -63,8 +64,8 @@ def _composite(node: syntax.Composite, scope: Scope) -> model.Behavior:
 
 def apply_modifiers(behavior: model.Behavior, modifiers: list[syntax.ModifierInvocation],
                     scope: Scope) -> model.Behavior:
-    """Wrap ``behavior`` in each modifier, the first written innermost."""
-    for invocation in modifiers:
+    """Wrap ``behavior`` in each modifier, the first written outermost."""
+    for invocation in reversed(modifiers):
         mtype = modifier_type(invocation.name, scope)
         if mtype is None:
             raise NameLookupError(f"unknown modifier '{invocation.name.dotted}'", invocation.name.location)
@@ -161,8 +162,10 @@ def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
             raise ArgumentError("'elapsed(...)' needs a duration", cond.location)
         arg = bound["duration"]
         value = resolve_expression(arg.value, scope)
-        if not (isinstance(value.type, PhysicalType) and value.type.name == "time"):
-            raise OscTypeError(f"'elapsed(...)' needs a time (e.g. 3s), got {value.type}", arg.location)
+        is_time = isinstance(value.type, PhysicalType) and value.type.name == "time"
+        if not (is_time or is_numeric(value.type) or value.type is ANY):
+            raise OscTypeError(f"'elapsed(...)' needs a time (e.g. 3s) or seconds, got {value.type}",
+                               arg.location)
         return model.WaitElapsed(node.label or "wait", value.expr, node.location)
     if isinstance(cond, syntax.EventRef):
         key = ".".join(cond.path)

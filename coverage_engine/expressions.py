@@ -212,6 +212,9 @@ def _arithmetic_type(op: str, a: OscType, b: OscType) -> OscType | None:
 
 
 def _list(expr: syntax.ListExpr, scope: Scope, expected: OscType | None) -> TypedExpr:
+    if not expr.items:
+        raise ResolveError("an empty list literal '[]' is not supported; leave the default out instead "
+                           "(a list without a default starts empty)", expr.location)
     element_expected = expected.element if isinstance(expected, ListType) else None
     items = [resolve_expression(i, scope, element_expected) for i in expr.items]
     if element_expected is not None:
@@ -247,6 +250,9 @@ def coerce(value: TypedExpr, target: OscType, location: syntax.Location, what: s
            lenient_string: bool = False) -> TypedExpr:
     """``value`` made to fit ``target`` (int→float, list elements…) or an error saying what did not fit.
 
+    A single value where a list is expected becomes a one-element list (``sub_struct("a")`` for a
+    ``list of string`` member), as the reference implementation accepts it.
+
     With ``lenient_string`` any value may go where a string is declared (action arguments such as
     ``log(msg)`` receive the value itself).
     """
@@ -255,6 +261,11 @@ def coerce(value: TypedExpr, target: OscType, location: syntax.Location, what: s
         return value
     if lenient_string and target is STRING:
         return value
+    if isinstance(target, ListType) and not isinstance(src, ListType) and _assignable(src, target.element):
+        item = coerce(value, target.element, location, what)
+        if item.is_const:
+            return TypedExpr(model.Const([item.value]), target, item.is_literal)
+        return TypedExpr(model.MakeList((item.expr,)), target, False)
     if not _assignable(src, target):
         raise OscTypeError(f"{what}: expected {target}, got {src}", location)
     if value.is_const and (target is FLOAT or isinstance(target, PhysicalType) or isinstance(target, ListType)):

@@ -213,7 +213,7 @@ class Modified:
 
     ``arguments`` are the modifier's declared parameters with constant values (``duration`` in seconds,
     ``count`` as int). Several modifiers on one behaviour nest in the order written: the first written is
-    the innermost.
+    the outermost.
     """
 
     modifier: str

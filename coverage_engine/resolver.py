@@ -13,6 +13,7 @@ from pathlib import Path
 
 from coverage_engine import model, syntax
 from coverage_engine.behaviors import apply_modifiers, resolve_behavior
+from coverage_engine.checks import check_declarations
 from coverage_engine.errors import OscError, ParameterFileError, ResolveError
 from coverage_engine.imports import collect_units
 from coverage_engine.instances import global_value, instantiate
@@ -50,6 +51,9 @@ def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], 
     ctx = ResolveContext(namespace, overrides)
     for name in namespace.globals:
         global_value(ctx, name, namespace.globals[name].location)
+    check_declarations(ctx, unit)
+    if not namespace.scenarios:
+        raise ResolveError(f"{unit.file} declares no scenario")
     _check_unique_scenarios(namespace.scenarios)
     per_scenario = check_document(overrides, [s.name for s in namespace.scenarios])
     scenarios = tuple(_scenario(ctx, s, per_scenario.get(s.name)) for s in namespace.scenarios)

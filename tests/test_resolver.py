@@ -113,7 +113,7 @@ def test_variables_and_wait_conditions_stay_symbolic(tmp_path):
     assert isinstance(body.children[1], model.WaitCondition)
 
 
-def test_modifiers_nest_first_written_innermost(tmp_path):
+def test_modifiers_nest_first_written_outermost(tmp_path):
     sf = load(tmp_path, """
         scenario sc:
             timeout(2s)
@@ -125,9 +125,9 @@ def test_modifiers_nest_first_written_innermost(tmp_path):
     body = sf.scenarios[0].body
     assert isinstance(body, model.Modified) and body.modifier == "timeout"
     assert dict(body.arguments) == {"duration": 2.0}
-    inner = body.child.children[0]
-    assert inner.modifier == "retry" and dict(inner.arguments) == {"count": 3}
-    assert inner.child.modifier == "inverter"
+    outer = body.child.children[0]
+    assert outer.modifier == "inverter"
+    assert outer.child.modifier == "retry" and dict(outer.child.arguments) == {"count": 3}
 
 
 def test_keep_sets_an_action_argument(tmp_path):
@@ -143,7 +143,7 @@ def test_keep_sets_an_action_argument(tmp_path):
     ("log(unknown_name)", NameLookupError, 13),
     ("log(msg: 'a', msg: 'b')", ArgumentError, 23),
     ("log('a', foo: 'b')", ArgumentError, 18),
-    ("wait elapsed(3)", OscTypeError, 22),
+    ("wait elapsed('3')", OscTypeError, 22),
     ("no_such_action()", NameLookupError, 9),
     ("log(1s + 1)", OscTypeError, 13),
     ("log('x') with:\n                    no_such_modifier()", NameLookupError, 13),

@@ -163,8 +163,11 @@ def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
         arg = bound["duration"]
         value = resolve_expression(arg.value, scope)
         is_time = isinstance(value.type, PhysicalType) and value.type.name == "time"
-        if not (is_time or is_numeric(value.type) or value.type is ANY):
-            raise OscTypeError(f"'elapsed(...)' needs a time (e.g. 3s) or seconds, got {value.type}",
+        # A number computed at run time (an external method's result) counts as seconds; a number
+        # written in the file needs its unit.
+        run_time_number = is_numeric(value.type) and not value.is_const
+        if not (is_time or run_time_number or value.type is ANY):
+            raise OscTypeError(f"'elapsed(...)' needs a time with its unit (e.g. 3s), got {value.type}",
                                arg.location)
         return model.WaitElapsed(node.label or "wait", value.expr, node.location)
     if isinstance(cond, syntax.EventRef):

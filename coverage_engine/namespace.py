@@ -82,6 +82,9 @@ def build_namespace(units: list[syntax.CompilationUnit], main: syntax.Compilatio
 
 
 def _register(ns: Namespace, name: str, value: OscType, location: syntax.Location) -> None:
+    if name.startswith("listof"):
+        # The reference implementation rejects such names; refusing them too keeps files portable.
+        raise ResolveError(f"type name '{name}': names starting with 'listof' are reserved", location)
     if name in ns.types or name in PRIMITIVES:
         raise ResolveError(f"'{name}' is already declared", location)
     ns.types[name] = value

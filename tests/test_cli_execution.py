@@ -67,6 +67,16 @@ def test_run_writes_results_and_exit_code(tmp_path):
 
 
 @needs_frontend
+def test_action_without_implementation_is_an_error_even_in_dry_run(tmp_path):
+    write(tmp_path, "s.osc", HELPERS + "action no_plugin_here:\n    p: string = 'x'\n"
+                                       "scenario s:\n    do no_plugin_here()\n")
+    done = run_cli("s.osc", "-n", cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stdout
+    assert "no_plugin_here" in done.stdout and "scenario_execution.actions" in done.stdout
+    assert done.stdout.startswith("s.osc:")
+
+
+@needs_frontend
 def test_dry_run_and_log_model_execute_nothing(tmp_path):
     write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('executed')\n")
     done = run_cli("s.osc", "-n", "-l", "-o", "out", cwd=tmp_path)

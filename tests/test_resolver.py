@@ -143,7 +143,7 @@ def test_keep_sets_an_action_argument(tmp_path):
     ("log(unknown_name)", NameLookupError, 13),
     ("log(msg: 'a', msg: 'b')", ArgumentError, 23),
     ("log('a', foo: 'b')", ArgumentError, 18),
-    ("wait elapsed('3')", OscTypeError, 22),
+    ("wait elapsed(3)", OscTypeError, 22),
     ("no_such_action()", NameLookupError, 9),
     ("log(1s + 1)", OscTypeError, 13),
     ("log('x') with:\n                    no_such_modifier()", NameLookupError, 13),

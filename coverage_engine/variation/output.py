@@ -15,6 +15,7 @@ from pathlib import Path
 
 from coverage_engine.sce import SceTemplate, is_sce_text, relative_source_dir
 from coverage_engine.variation.plan import Rejection, VariationPlan
+from coverage_engine.variation.writer import FileWriter
 
 #: The ``.sce`` suffix; files are named ``<source stem><index>.sce``.
 SUFFIX = ".sce"
@@ -90,6 +91,10 @@ def _same_content(path: str, data: bytes) -> bool:
         return False
 
 
+#: From this many combinations on, files are written by a forked helper process (see writer.py).
+BACKGROUND_FROM = 5000
+
+
 def generate(plan: VariationPlan, output_dir: str | os.PathLike,
              existing: Container[str] = ()) -> Iterator[Generated]:
     """Write every valid combination of ``plan`` to ``output_dir`` and yield each (also skipped ones).
@@ -104,8 +109,12 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike,
     template = sce_template(plan, folder)
     prefix = str(folder.resolve() / plan.path.stem)
     fragments = _assignment_fragments(plan)
-    flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
     sha256 = hashlib.sha256
+    with FileWriter(background=plan.total >= BACKGROUND_FROM) as writer:
+        yield from _generate(plan, template, prefix, fragments, existing, writer, sha256)
+
+
+def _generate(plan, template, prefix, fragments, existing, writer, sha256) -> Iterator[Generated]:
     for index, choices, rejection in plan.combinations():
         if rejection is not None:
             yield Generated(index, choices, None, None, None, None, rejection)
@@ -117,13 +126,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike,
             yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices),
                             None)
             continue
-        fd = os.open(path, flags, 0o644)
-        try:
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
-        finally:
-            os.close(fd)
+        writer.write(path, data)
         yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices), None)
 
 

@@ -41,7 +41,7 @@ class LiveTree:
         if not self.started:
             self.live.start()
             self.started = True
-        self.live.update(Panel(Text(tree), title=f"{run_name}", subtitle=root.status.name))
+        self.live.update(Panel(Text.from_ansi(tree), title=run_name, subtitle=root.status.name))
 
     def close(self) -> None:
         if self.started:

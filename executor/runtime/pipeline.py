@@ -145,6 +145,9 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     scenario_dir = os.path.dirname(os.path.abspath(request.scenario))
     add_import_paths([os.getcwd(), scenario_dir])
     runs = plan_runs(loaded, output_root)
+    if not runs:
+        logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
+        return EXIT_FAILED
     if request.dot:
         from executor.runtime.dot import write_dot_files
 

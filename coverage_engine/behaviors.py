@@ -8,11 +8,18 @@ block apply to that composite or invocation; several nest in the order written, 
 from __future__ import annotations
 
 from coverage_engine import model, syntax
-from coverage_engine.errors import ArgumentError, NameLookupError, OscTypeError, ResolveError, UnsupportedFeatureError
+from coverage_engine.errors import (
+    ArgumentError,
+    NameLookupError,
+    OscTypeError,
+    ResolveError,
+    UnsupportedFeatureError,
+)
 from coverage_engine.expressions import bind_arguments, coerce, resolve_expression
 from coverage_engine.instances import extract_keep
 from coverage_engine.scope import Scope
 from coverage_engine.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
+
 
 def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:
     """The model behaviour for one member of a ``do`` body."""

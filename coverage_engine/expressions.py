@@ -224,7 +224,7 @@ def _list(expr: syntax.ListExpr, scope: Scope, expected: OscType | None) -> Type
     else:
         element = ANY
     converted = [coerce(item, element, item_expr.location, f"list element {n}")
-                 for n, (item, item_expr) in enumerate(zip(items, expr.items))]
+                 for n, (item, item_expr) in enumerate(zip(items, expr.items, strict=True))]
     ltype = ListType(element)
     literal = all(i.is_literal for i in converted)
     if all(i.is_const for i in converted):

@@ -49,7 +49,7 @@ def call_external(ctx: ResolveContext, decl: syntax.MethodDecl, owner: CompoundT
     names = [p.name for p in decl.parameters]
     bound = bind_arguments(names, arguments, f"method '{method.name}'", location)
     values: list[tuple[str, model.Expr]] = []
-    for p, (name, _tname, default) in zip(decl.parameters, method.parameters):
+    for p, (name, _tname, default) in zip(decl.parameters, method.parameters, strict=True):
         ptype = ctx.namespace.lookup_type(p.type)
         if name in bound:
             arg = bound[name]

@@ -13,9 +13,9 @@ Value representation (also what ``log`` prints, as Python ``repr``/``str``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Union
+from dataclasses import field
 
+from coverage_engine.nodes import Node, node
 from coverage_engine.syntax import Location
 
 
@@ -40,15 +40,15 @@ class EnumValue(tuple):
 # Run-time expressions
 
 
-@dataclass(frozen=True, slots=True)
-class Const:
+@node
+class Const(Node):
     """A value known before the run."""
 
     value: object
 
 
-@dataclass(frozen=True, slots=True)
-class Variable:
+@node
+class Variable(Node):
     """A ``var``: ``key`` is unique within its scenario (``my_actor.my_struct.count``); ``initial`` its start value.
 
     ``type_name`` is the declared type (``int``, ``float``, ``string``, ``bool``, a physical type or a
@@ -61,23 +61,23 @@ class Variable:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class VariableRef:
+@node
+class VariableRef(Node):
     """The current value of a variable."""
 
     variable: Variable
 
 
-@dataclass(frozen=True, slots=True)
-class FieldOf:
+@node
+class FieldOf(Node):
     """A member of a struct value computed at run time: ``target[name]``."""
 
     target: Expr
     name: str
 
 
-@dataclass(frozen=True, slots=True)
-class ExternalMethod:
+@node
+class ExternalMethod(Node):
     """A ``def … is external module.function()`` signature.
 
     ``parameters`` are ``(name, type_name, default Expr or None)`` in order. The Python function is
@@ -92,8 +92,8 @@ class ExternalMethod:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class ExternalCall:
+@node
+class ExternalCall(Node):
     """A call of an external method; ``arguments`` map every parameter name to its value expression."""
 
     method: ExternalMethod
@@ -101,8 +101,8 @@ class ExternalCall:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Operation:
+@node
+class Operation(Node):
     """An operator applied at run time. ``op``: ``+ - * / % == != < <= > >= and or not neg in``."""
 
     op: str
@@ -110,30 +110,30 @@ class Operation:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class MakeList:
+@node
+class MakeList(Node):
     """A list whose items are computed at run time."""
 
     items: tuple[Expr, ...]
 
 
-@dataclass(frozen=True, slots=True)
-class MakeStruct:
+@node
+class MakeStruct(Node):
     """A struct instance whose members are computed at run time (``dict`` in member order)."""
 
     type_name: str
     members: tuple[tuple[str, Expr], ...]
 
 
-Expr = Union[Const, VariableRef, FieldOf, ExternalCall, Operation, MakeList, MakeStruct]
+Expr = Const | VariableRef | FieldOf | ExternalCall | Operation | MakeList | MakeStruct
 
 
 # --------------------------------------------------------------------------------------------------
 # Behaviours
 
 
-@dataclass(frozen=True, slots=True)
-class Composite:
+@node
+class Composite(Node):
     """``serial``, ``parallel`` or ``one_of`` (``kind``); ``name`` is the label or the kind."""
 
     kind: str
@@ -142,8 +142,8 @@ class Composite:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class ActionCall:
+@node
+class ActionCall(Node):
     """An action invocation ready to run.
 
     ``action`` is the declared (qualified) name, e.g. ``log`` or ``robot.move``; ``plugin_names`` the
@@ -161,8 +161,8 @@ class ActionCall:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class WaitElapsed:
+@node
+class WaitElapsed(Node):
     """``wait elapsed(duration)``: duration in seconds (simulation time when a simulation runs)."""
 
     name: str
@@ -170,8 +170,8 @@ class WaitElapsed:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class WaitCondition:
+@node
+class WaitCondition(Node):
     """``wait <condition>``: running until the condition is true."""
 
     name: str
@@ -179,8 +179,8 @@ class WaitCondition:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class WaitEvent:
+@node
+class WaitEvent(Node):
     """``wait @event``: running until the event (by key) has been emitted."""
 
     name: str
@@ -188,8 +188,8 @@ class WaitEvent:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EmitEvent:
+@node
+class EmitEvent(Node):
     """``emit event``. The keys ``end`` and ``fail`` end the scenario at once with success or failure."""
 
     name: str
@@ -197,8 +197,8 @@ class EmitEvent:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class CallMethod:
+@node
+class CallMethod(Node):
     """``call …``: evaluate an expression for its effect."""
 
     name: str
@@ -206,8 +206,8 @@ class CallMethod:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Modified:
+@node
+class Modified(Node):
     """A modifier wrapped around a behaviour: ``timeout``, ``repeat``, ``retry``, ``inverter``,
     ``failure_is_running`` … ``success_is_running``.
 
@@ -222,15 +222,18 @@ class Modified:
     location: Location
 
 
-Behavior = Union[Composite, ActionCall, WaitElapsed, WaitCondition, WaitEvent, EmitEvent, CallMethod, Modified]
+Behavior = (
+    Composite | ActionCall | WaitElapsed | WaitCondition | WaitEvent | EmitEvent | CallMethod |
+    Modified
+)
 
 
 # --------------------------------------------------------------------------------------------------
 # Scenarios
 
 
-@dataclass(frozen=True, slots=True)
-class Parameter:
+@node
+class Parameter(Node):
     """A scenario-level parameter with its resolved value (structs as dicts) and declared type name.
 
     ``overridable`` is False for parameters a YAML document may not set (actors, defaults that refer
@@ -244,8 +247,8 @@ class Parameter:
     overridable: bool = True
 
 
-@dataclass(frozen=True, slots=True)
-class Scenario:
+@node
+class Scenario(Node):
     """One scenario ready to run. ``body`` already includes the scenario-level modifiers (``timeout(60s)``)."""
 
     name: str
@@ -261,8 +264,8 @@ class Scenario:
         return {p.name: p.value for p in self.parameters}
 
 
-@dataclass(frozen=True, slots=True)
-class ScenarioFile:
+@node
+class ScenarioFile(Node):
     """A resolved file: its scenarios in file order, and where it came from."""
 
     path: str

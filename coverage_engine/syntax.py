@@ -8,12 +8,13 @@ into them: names are not looked up, units are not converted, nothing is evaluate
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Union
+from dataclasses import field
+
+from coverage_engine.nodes import Node, node
 
 
-@dataclass(frozen=True, slots=True)
-class Location:
+@node
+class Location(Node):
     """Where a node stands in its file: 1-based line/column of its start and end, and 0-based offsets.
 
     ``start_pos``/``end_pos`` index the file's text (as read, after CRLF was kept) so tools such as the
@@ -36,8 +37,8 @@ class Location:
 # Names and types
 
 
-@dataclass(frozen=True, slots=True)
-class QualifiedName:
+@node
+class QualifiedName(Node):
     """A dotted declaration or reference name: ``log``, ``robot.move``, ``osc.helpers`` (parts kept apart)."""
 
     parts: tuple[str, ...]
@@ -48,8 +49,8 @@ class QualifiedName:
         return ".".join(self.parts)
 
 
-@dataclass(frozen=True, slots=True)
-class TypeRef:
+@node
+class TypeRef(Node):
     """A type as written: ``int``, ``length``, ``position_3d``, ``list of string``."""
 
     name: QualifiedName
@@ -61,8 +62,8 @@ class TypeRef:
 # Expressions
 
 
-@dataclass(frozen=True, slots=True)
-class Literal:
+@node
+class Literal(Node):
     """A plain literal. ``kind`` is one of ``int``, ``float``, ``bool``, ``string``; ``value`` the Python value.
 
     Hex integers are already turned into ``int``; strings have their escapes processed.
@@ -73,8 +74,8 @@ class Literal:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class PhysicalLiteral:
+@node
+class PhysicalLiteral(Node):
     """A number followed by a unit name: ``3s``, ``-2.0rad``, ``1.0e3m``. ``number`` is int or float as written."""
 
     number: int | float
@@ -82,16 +83,16 @@ class PhysicalLiteral:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Identifier:
+@node
+class Identifier(Node):
     """A bare name used as a value: a parameter, variable, global, ``it``, a type name (``base_struct``)."""
 
     name: str
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class MemberAccess:
+@node
+class MemberAccess(Node):
     """``target.member`` (``foo.x``, ``it.x``, ``lib.factorial``)."""
 
     target: Expression
@@ -99,8 +100,8 @@ class MemberAccess:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Argument:
+@node
+class Argument(Node):
     """One argument of a call or invocation; ``name`` is None for a positional one."""
 
     name: str | None
@@ -108,8 +109,8 @@ class Argument:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Call:
+@node
+class Call(Node):
     """``callee(args)``: a struct constructor, a method call (``lib.factorial(4)``) or ``elapsed(3s)``."""
 
     callee: Expression
@@ -117,8 +118,8 @@ class Call:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class BinaryOp:
+@node
+class BinaryOp(Node):
     """``left op right`` with ``op`` one of ``+ - * / % == != < <= > >= and or in =>``."""
 
     op: str
@@ -127,8 +128,8 @@ class BinaryOp:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class UnaryOp:
+@node
+class UnaryOp(Node):
     """``-operand`` or ``not operand``."""
 
     op: str
@@ -136,8 +137,8 @@ class UnaryOp:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Ternary:
+@node
+class Ternary(Node):
     """``condition ? if_true : if_false``."""
 
     condition: Expression
@@ -146,16 +147,16 @@ class Ternary:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class ListExpr:
+@node
+class ListExpr(Node):
     """``[a, b, c]`` (possibly empty)."""
 
     items: tuple[Expression, ...]
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class RangeExpr:
+@node
+class RangeExpr(Node):
     """``[low..high]``."""
 
     low: Expression
@@ -163,8 +164,8 @@ class RangeExpr:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EnumValueRef:
+@node
+class EnumValueRef(Node):
     """``enum_type!member`` (``enum_type`` may be None when written ``!member``)."""
 
     enum: str | None
@@ -172,26 +173,26 @@ class EnumValueRef:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EventRef:
+@node
+class EventRef(Node):
     """``@name`` or ``@actor.name`` in ``wait @test``."""
 
     path: tuple[str, ...]
     location: Location
 
 
-Expression = Union[
-    Literal, PhysicalLiteral, Identifier, MemberAccess, Call, BinaryOp, UnaryOp, Ternary,
-    ListExpr, RangeExpr, EnumValueRef, EventRef,
-]
+Expression = (
+    Literal | PhysicalLiteral | Identifier | MemberAccess | Call | BinaryOp | UnaryOp | Ternary |
+    ListExpr | RangeExpr | EnumValueRef | EventRef
+)
 
 
 # --------------------------------------------------------------------------------------------------
 # Members of declarations
 
 
-@dataclass(frozen=True, slots=True)
-class KeepConstraint:
+@node
+class KeepConstraint(Node):
     """``keep(expr)`` or ``keep(default expr)``; ``location`` spans the whole ``keep(...)``."""
 
     expression: Expression
@@ -199,8 +200,8 @@ class KeepConstraint:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class ModifierInvocation:
+@node
+class ModifierInvocation(Node):
     """A modifier applied by name: ``timeout(60s)`` in a body, ``inverter()`` in a ``with:`` block."""
 
     name: QualifiedName
@@ -208,11 +209,11 @@ class ModifierInvocation:
     location: Location
 
 
-WithMember = Union[KeepConstraint, ModifierInvocation]
+WithMember = KeepConstraint | ModifierInvocation
 
 
-@dataclass(frozen=True, slots=True)
-class ParameterDecl:
+@node
+class ParameterDecl(Node):
     """``a, b: type = default with: keep(...)`` inside a struct/actor/action/scenario/modifier, or global.
 
     ``is_global`` is set for ``global`` declarations at file level.
@@ -226,8 +227,8 @@ class ParameterDecl:
     is_global: bool = False
 
 
-@dataclass(frozen=True, slots=True)
-class VariableDecl:
+@node
+class VariableDecl(Node):
     """``var a: type = initial`` (the initial value may be an expression evaluated when the run starts)."""
 
     names: tuple[str, ...]
@@ -236,8 +237,8 @@ class VariableDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EventDecl:
+@node
+class EventDecl(Node):
     """``event name`` (optionally with parameters ``event name(a: int)``)."""
 
     name: str
@@ -245,8 +246,8 @@ class EventDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class MethodParameter:
+@node
+class MethodParameter(Node):
     """A parameter of a method or event signature: ``n: int = 10``."""
 
     name: str
@@ -255,8 +256,8 @@ class MethodParameter:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class MethodDecl:
+@node
+class MethodDecl(Node):
     """``def name(params) -> type is external module.function(args)``.
 
     ``external`` is the dotted Python path (``module.function``); ``external_arguments`` any arguments
@@ -271,8 +272,8 @@ class MethodDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class DoDirective:
+@node
+class DoDirective(Node):
     """``do <behaviour>``: the body of a scenario or action."""
 
     behavior: Behavior
@@ -283,8 +284,8 @@ class DoDirective:
 # Behaviours (inside ``do``)
 
 
-@dataclass(frozen=True, slots=True)
-class Composite:
+@node
+class Composite(Node):
     """``serial:``/``parallel:``/``one_of:`` with members; ``label`` from ``name: serial:``.
 
     ``members`` holds behaviours and :class:`ModifierInvocation` s written among them (these apply to the
@@ -300,8 +301,8 @@ class Composite:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Invocation:
+@node
+class Invocation(Node):
     """An action or scenario invocation: ``log("x")``, ``robot.move(speed: 1m/s) with: keep(...)``.
 
     ``name`` is the dotted name as written (``robot.move``: an actor instance or type, then the behaviour).
@@ -314,8 +315,8 @@ class Invocation:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Wait:
+@node
+class Wait(Node):
     """``wait <expr>``: ``wait elapsed(3s)`` (a :class:`Call` to ``elapsed``), ``wait @event``, ``wait x == 3``."""
 
     label: str | None
@@ -323,8 +324,8 @@ class Wait:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Emit:
+@node
+class Emit(Node):
     """``emit name`` or ``emit name(args)``; ``end`` and ``fail`` are ordinary names here."""
 
     label: str | None
@@ -333,8 +334,8 @@ class Emit:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class CallDirective:
+@node
+class CallDirective(Node):
     """``call lib.method(args)``: run a method for its effect."""
 
     label: str | None
@@ -342,15 +343,15 @@ class CallDirective:
     location: Location
 
 
-Behavior = Union[Composite, Invocation, Wait, Emit, CallDirective]
+Behavior = Composite | Invocation | Wait | Emit | CallDirective
 
 
 # --------------------------------------------------------------------------------------------------
 # Declarations (file level)
 
 
-@dataclass(frozen=True, slots=True)
-class Import:
+@node
+class Import(Node):
     """``import osc.helpers`` (``is_file`` False, ``path`` ``osc.helpers``) or ``import "rel/file.osc"``."""
 
     path: str
@@ -358,8 +359,8 @@ class Import:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class PhysicalTypeDecl:
+@node
+class PhysicalTypeDecl(Node):
     """``type length is SI(m: 1)``; ``exponents`` maps SI base unit names to integer exponents."""
 
     name: str
@@ -367,8 +368,8 @@ class PhysicalTypeDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class UnitDecl:
+@node
+class UnitDecl(Node):
     """``unit cm of length is SI(m: 1, factor: 0.01, offset: 0)``; factor/offset None when not written."""
 
     name: str
@@ -379,8 +380,8 @@ class UnitDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EnumMember:
+@node
+class EnumMember(Node):
     """One member of an enum; ``value`` None when not written."""
 
     name: str
@@ -388,8 +389,8 @@ class EnumMember:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class EnumDecl:
+@node
+class EnumDecl(Node):
     """``enum colour: [red, green = 3, blue]``."""
 
     name: str
@@ -397,11 +398,14 @@ class EnumDecl:
     location: Location
 
 
-Member = Union[ParameterDecl, VariableDecl, EventDecl, MethodDecl, KeepConstraint, ModifierInvocation, DoDirective]
+Member = (
+    ParameterDecl | VariableDecl | EventDecl | MethodDecl | KeepConstraint | ModifierInvocation |
+    DoDirective
+)
 
 
-@dataclass(frozen=True, slots=True)
-class TypeDecl:
+@node
+class TypeDecl(Node):
     """A ``struct``, ``actor``, ``action``, ``scenario`` or ``modifier`` declaration (``kind`` says which).
 
     ``name`` may be qualified (``robot.move`` declares behaviour ``move`` of actor ``robot``); ``parent``
@@ -415,8 +419,8 @@ class TypeDecl:
     location: Location
 
 
-@dataclass(frozen=True, slots=True)
-class Extension:
+@node
+class Extension(Node):
     """``extend name:`` with members added to an existing type."""
 
     name: QualifiedName
@@ -424,11 +428,11 @@ class Extension:
     location: Location
 
 
-Declaration = Union[PhysicalTypeDecl, UnitDecl, EnumDecl, TypeDecl, Extension, ParameterDecl]
+Declaration = PhysicalTypeDecl | UnitDecl | EnumDecl | TypeDecl | Extension | ParameterDecl
 
 
-@dataclass(frozen=True, slots=True)
-class CompilationUnit:
+@node
+class CompilationUnit(Node):
     """One parsed file: its imports and declarations in written order, and its text for error context."""
 
     file: str

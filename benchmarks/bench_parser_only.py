@@ -3,7 +3,7 @@
 ``python benchmarks/bench_parser_only.py [N ...]`` (default 10 100 300). Prints lines, best-of-3 wall
 and CPU seconds, and microseconds per line, so linear growth is visible; then the cost of a fresh
 process importing the parser and parsing osc.types + osc.helpers. (Whole-process figures against the
-reference are in ``bench_parse.py``.)
+reference are in ``bench_dry_run.py``.)
 """
 
 from __future__ import annotations

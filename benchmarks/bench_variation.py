@@ -52,7 +52,11 @@ def scenario_text(sizes: tuple[int, int, int], helpers: bool) -> str:
 
 
 def run_child(argv: list[str], cwd: Path) -> tuple[float, float, int, str]:
-    """Run ``argv``; returns (seconds, peak RSS in MB, exit code, output tail)."""
+    """Run ``argv``; returns (seconds, peak RSS in MB, exit code, output tail); prints its CPU time.
+
+    Wall time is what the goals are about; CPU time (user + system) is printed too because it is far
+    less sensitive to other load on the machine.
+    """
     started = time.perf_counter()
     proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     output = proc.stdout.read()
@@ -60,6 +64,8 @@ def run_child(argv: list[str], cwd: Path) -> tuple[float, float, int, str]:
     elapsed = time.perf_counter() - started
     proc.returncode = os.waitstatus_to_exitcode(status)
     rss_mb = usage.ru_maxrss / 1024 if sys.platform != "darwin" else usage.ru_maxrss / 2**20
+    print(f"  {Path(argv[1]).name if len(argv) > 1 else argv[0]} {Path(argv[-3]).name}: wall {elapsed:.3f} s, "
+          f"cpu {usage.ru_utime + usage.ru_stime:.3f} s", file=sys.stderr)
     return elapsed, rss_mb, proc.returncode, output.decode(errors="replace")[-600:]
 
 

@@ -107,7 +107,7 @@ def _find_action(node: syntax.Invocation, scope: Scope) -> tuple[CompoundType, m
                                    node.name.location)
             for ancestor in instance.type.ancestry():
                 if parts[1] in ancestor.behaviors:
-                    return ancestor.behaviors[parts[1]], instance.expr
+                    return ancestor.behaviors[parts[1]], _named_actor(instance.expr, parts[0])
             raise NameLookupError(f"actor '{instance.type.name}' has no action '{parts[1]}'", node.name.location)
         if parts[0] not in types and instance is None:
             raise NameLookupError(f"unknown actor '{parts[0]}'", node.name.location)
@@ -120,6 +120,15 @@ def _find_action(node: syntax.Invocation, scope: Scope) -> tuple[CompoundType, m
         if found.kind == "scenario":
             raise UnsupportedFeatureError(f"not supported: invoking scenario '{found.name}'", node.location)
     raise NameLookupError(f"unknown action '{node.name.dotted}'", node.name.location)
+
+
+def _named_actor(actor: model.Expr, name: str) -> model.Expr:
+    """The actor instance as an action receives it: its members plus ``name`` (the instance's name)."""
+    if isinstance(actor, model.Const) and isinstance(actor.value, dict):
+        return model.Const({**actor.value, "name": name})
+    if isinstance(actor, model.MakeStruct):
+        return model.MakeStruct(actor.type_name, (*actor.members, ("name", model.Const(name))))
+    return actor
 
 
 def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:

@@ -53,7 +53,7 @@ def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], 
         global_value(ctx, name, namespace.globals[name].location)
     check_declarations(ctx, unit)
     if not namespace.scenarios:
-        raise ResolveError(f"{unit.file} declares no scenario")
+        raise ResolveError("the file declares no scenario", syntax.Location(unit.file, 1, 1))
     _check_unique_scenarios(namespace.scenarios)
     per_scenario = check_document(overrides, [s.name for s in namespace.scenarios])
     scenarios = tuple(_scenario(ctx, s, per_scenario.get(s.name)) for s in namespace.scenarios)

@@ -237,3 +237,20 @@ def test_relative_import_and_unknown_library(tmp_path):
     assert logged(sf.scenarios[0]) == [5]
     with pytest.raises(OscError, match="osc.nope"):
         load(tmp_path, "import osc.nope\nscenario sc:\n    do log('x')\n", name="t.osc")
+
+
+EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples").rglob("*.osc")
+                  if "build" not in p.parts)
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_every_example_parses_and_resolves(path):
+    from coverage_engine.parser import parse_file
+
+    unit = parse_file(path)
+    declares_scenario = any(getattr(d, "kind", None) == "scenario" for d in unit.declarations)
+    needs_example_library = "import osc.example\n" in unit.text
+    if needs_example_library:
+        pytest.importorskip("example_library", reason="examples/example_library is not installed")
+    if declares_scenario:
+        assert load_scenario_file(path).scenarios

@@ -1,0 +1,31 @@
+"""Property test: mutated example files either load (parse + resolve) or fail with a located OscError.
+
+The same mutations as the parser's property test, taken one pass further: what parses must also
+resolve or be rejected by the resolver with a position, never with another exception.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from hypothesis import HealthCheck, given, settings
+from test_parser_fuzz import mutated
+
+from coverage_engine.errors import OscError
+from coverage_engine.loader import load_scenario_file
+
+WORK = Path(tempfile.mkdtemp(prefix="resolver_fuzz_"))
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mutated())
+def test_mutations_load_or_fail_with_a_located_error(text):
+    path = WORK / "fuzz.osc"
+    path.write_text(text, encoding="utf-8")
+    try:
+        load_scenario_file(path)
+    except OscError as exc:
+        assert exc.location is not None, exc.render()
+        assert exc.location.line >= 1 and exc.location.column >= 1
+        exc.render()

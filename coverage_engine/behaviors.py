@@ -143,6 +143,9 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
             continue
         keep = extract_keep(member, scope)
         if len(keep.path) != 1 or keep.path[0] not in action.fields:
+            if not keep.path:
+                raise ResolveError(f"{what}: 'keep(it == …)' needs a parameter ('keep(it.name == …)')",
+                                   member.location)
             raise NameLookupError(f"{what} has no parameter '{'.'.join(keep.path)}'", member.location)
         if keep.path[0] in bound or keep.path[0] in keeps:
             raise ArgumentError(f"{what}: parameter '{keep.path[0]}' is given twice", member.location)

@@ -21,14 +21,14 @@ OverrideHook = Callable[[str, "TypedExpr | None", "FieldInfo"], "TypedExpr | Non
 
 
 def it_path(expr: syntax.Expression) -> tuple[str, ...] | None:
-    """``it.a.b`` → ``("a", "b")``; a bare member name ``a`` → ``("a",)``; anything else None."""
+    """``it.a.b`` → ``("a", "b")``; ``it`` → ``()``; a bare member name ``a`` → ``("a",)``; else None."""
     parts: list[str] = []
     while isinstance(expr, syntax.MemberAccess):
         parts.append(expr.member)
         expr = expr.target
     if isinstance(expr, syntax.Identifier):
         if expr.name == "it":
-            return tuple(reversed(parts)) if parts else None
+            return tuple(reversed(parts))
         return (expr.name, *reversed(parts))
     return None
 
@@ -74,6 +74,9 @@ def instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Typed
     direct: dict[str, KeepValue] = {}
     nested: dict[str, list[KeepValue]] = {}
     for keep in all_keeps:
+        if not keep.path:
+            raise ResolveError(f"'keep(it == …)' cannot replace a whole '{ctype.name}' here; "
+                               "constrain a member ('keep(it.member == …)')", keep.location)
         head = keep.path[0]
         if head not in ctype.fields and head not in ctype.variables:
             raise NameLookupError(f"'{ctype.name}' has no member '{head}'", keep.location)
@@ -130,6 +133,12 @@ def field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression 
     for m in with_members:
         if isinstance(m, syntax.ModifierInvocation):
             raise ResolveError(f"a modifier cannot be applied to {what}", m.location)
+    whole = [k for k in keeps if not k.path]
+    if whole:
+        # ``p: T with: keep(it == v)`` gives the value itself; the last such keep wins over the default.
+        keeps = [k for k in keeps if k.path]
+        value = coerce(resolve_expression(whole[-1].value, whole[-1].scope, ftype), ftype, whole[-1].location, what)
+        return apply_nested_keeps(ctx, value, keeps, key, location) if keeps else value
     if default is not None:
         value = coerce(resolve_expression(default, scope, ftype), ftype, default.location, what)
         if keeps:

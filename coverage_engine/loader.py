@@ -35,7 +35,23 @@ def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None 
         document = read_sce(path)
         unit = parse_text(document.text, str(path))
         base_dir = Path(document.source_dir)
+        if document.parameters:
+            recorded = {k: v for k, v in document.parameters.items() if k != "_output_dir"}
+            overrides = merge_overrides(recorded, overrides)
     else:
         unit = parse_file(path)
         base_dir = path.parent
     return resolve(unit, base_dir=base_dir, overrides=overrides)
+
+
+def merge_overrides(base: Mapping[str, object], top: Mapping[str, object] | None) -> dict[str, object]:
+    """Parameter documents combined: ``top`` (the command line's) wins, scenario by scenario."""
+    merged: dict[str, object] = {name: dict(values) if isinstance(values, Mapping) else values
+                                 for name, values in base.items()}
+    for name, values in (top or {}).items():
+        current = merged.get(name)
+        if isinstance(current, dict) and isinstance(values, Mapping):
+            current.update(values)
+        else:
+            merged[name] = values
+    return merged

@@ -144,7 +144,8 @@ class WorkerIdentity:
 
     @classmethod
     def current(cls) -> WorkerIdentity:
-        host = socket.gethostname()
+        """This process; the host name comes from ``$SCENARIO_WORKER_HOST`` if set (e.g. a node name)."""
+        host = os.environ.get("SCENARIO_WORKER_HOST") or socket.gethostname()
         pid = os.getpid()
         return cls(id=f"{host}:{pid}:{uuid.uuid4().hex[:8]}", host=host, pid=pid)
 

@@ -87,8 +87,17 @@ def test_ctrl_c_cancels_writes_partial_report_and_resume_completes(tmp_path):
     assert _suite_names(tmp_path / "results" / "test.xml") == names
     runs = ledger(tmp_path)
     assert all(runs[n] == 1 for n in finished)
-    for name in cancelled:                                        # the cancelled attempt's log is kept
-        assert (tmp_path / "results" / name / "log.1.txt").exists()
+    store = QueueStore.open(f"sqlite:///{tmp_path / '.scenario_store.db'}")
+    try:
+        for job in store.jobs(store.latest_batch().id):
+            if job.name not in cancelled:
+                continue
+            first = store.attempts(job.id)[0]
+            assert first["outcome"] == "cancelled" and job.attempts == 2
+            if first["reason"] != "cancelled before it started":      # the cancelled attempt's log is kept
+                assert (tmp_path / "results" / job.name / "log.1.txt").exists()
+    finally:
+        store.close()
 
 
 def test_resume_of_a_finished_batch_rewrites_the_report(tmp_path):

@@ -254,3 +254,23 @@ def test_every_example_parses_and_resolves(path):
         pytest.importorskip("example_library", reason="examples/example_library is not installed")
     if declares_scenario:
         assert load_scenario_file(path).scenarios
+
+
+def test_keep_it_equals_sets_a_scenario_parameter(tmp_path):
+    sf = load(tmp_path, """
+        scenario sc:
+            speed: float = 1.0 with:
+                keep(it == 2.5)
+            do log(speed)
+        """)
+    assert logged(sf.scenarios[0]) == [2.5]
+    assert sf.scenarios[0].parameter_values() == {"speed": 2.5}
+
+
+def test_sce_parameters_apply_under_command_line_overrides():
+    from coverage_engine.loader import merge_overrides
+
+    recorded = {"test": {"speed": 3.5, "name": "a"}, "other": {"x": 1}}
+    assert merge_overrides(recorded, {"test": {"name": "b"}}) == {
+        "test": {"speed": 3.5, "name": "b"}, "other": {"x": 1}}
+    assert recorded["test"]["name"] == "a"

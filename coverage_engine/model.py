@@ -13,8 +13,6 @@ Value representation (also what ``log`` prints, as Python ``repr``/``str``):
 
 from __future__ import annotations
 
-from dataclasses import field
-
 from coverage_engine.nodes import Node, node
 from coverage_engine.syntax import Location
 
@@ -270,4 +268,4 @@ class ScenarioFile(Node):
 
     path: str
     scenarios: tuple[Scenario, ...]
-    search_paths: tuple[str, ...] = field(default=())
+    search_paths: tuple[str, ...] = ()

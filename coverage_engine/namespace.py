@@ -6,8 +6,6 @@ types get their members, parents first. Redeclaring a name is an error at the se
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from coverage_engine import syntax
 from coverage_engine.errors import NameLookupError, ResolveError, UnsupportedFeatureError
 from coverage_engine.types import (
@@ -23,14 +21,14 @@ from coverage_engine.types import (
 )
 
 
-@dataclass
 class Namespace:
-    """Everything declared at file level, by name."""
+    """Everything declared at file level, by name; scenarios of the main file in file order."""
 
-    types: dict[str, OscType] = field(default_factory=dict)
-    units: dict[str, Unit] = field(default_factory=dict)
-    globals: dict[str, syntax.ParameterDecl] = field(default_factory=dict)
-    scenarios: list[CompoundType] = field(default_factory=list)
+    def __init__(self) -> None:
+        self.types: dict[str, OscType] = {}
+        self.units: dict[str, Unit] = {}
+        self.globals: dict[str, syntax.ParameterDecl] = {}
+        self.scenarios: list[CompoundType] = []
 
     def lookup_type(self, ref: syntax.TypeRef) -> OscType:
         """The type a :class:`~coverage_engine.syntax.TypeRef` names, or an error at its position."""

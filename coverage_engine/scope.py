@@ -8,15 +8,15 @@ parent and finally to the globals of the :class:`ResolveContext`.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 
 from coverage_engine import model, syntax
 from coverage_engine.namespace import Namespace
-from coverage_engine.types import CompoundType, OscType
+from coverage_engine.nodes import Node, node
+from coverage_engine.types import OscType
 
 
-@dataclass(frozen=True, slots=True)
-class TypedExpr:
+@node
+class TypedExpr(Node):
     """A resolved value: its model expression and its type. ``is_literal`` marks values written as
     literals (no reference to other names): only parameters with such defaults can be overridden."""
 
@@ -34,15 +34,18 @@ class TypedExpr:
         return self.expr.value
 
 
-@dataclass
 class Scope:
     """Names visible at one place: local values, ``it``, then the parent scope, then globals."""
 
-    ctx: ResolveContext
-    names: dict[str, TypedExpr] = field(default_factory=dict)
-    it: TypedExpr | None = None
-    parent: Scope | None = None
-    events: dict[str, str] = field(default_factory=dict)
+    __slots__ = ("ctx", "names", "it", "parent", "events")
+
+    def __init__(self, ctx: ResolveContext, names: dict[str, TypedExpr] | None = None, it: TypedExpr | None = None,
+                 parent: Scope | None = None, events: dict[str, str] | None = None) -> None:
+        self.ctx = ctx
+        self.names = names if names is not None else {}
+        self.it = it
+        self.parent = parent
+        self.events = events if events is not None else {}
 
     def lookup(self, name: str) -> TypedExpr | None:
         scope: Scope | None = self
@@ -57,18 +60,18 @@ class Scope:
         return Scope(self.ctx, names if names is not None else {}, it, self, dict(self.events))
 
 
-@dataclass
 class ResolveContext:
     """State of one resolution: the namespace, global values computed so far, the variables created
     for the scenario being resolved, and the parameter overrides of the run."""
 
-    namespace: Namespace
-    overrides: Mapping[str, object] | None = None
-    global_values: dict[str, TypedExpr] = field(default_factory=dict)
-    globals_in_progress: list[str] = field(default_factory=list)
-    variables: list[model.Variable] = field(default_factory=list)
-    methods: dict[int, model.ExternalMethod] = field(default_factory=dict)
-    counter: int = 0
+    def __init__(self, namespace: Namespace, overrides: Mapping[str, object] | None = None) -> None:
+        self.namespace = namespace
+        self.overrides = overrides
+        self.global_values: dict[str, TypedExpr] = {}
+        self.globals_in_progress: list[str] = []
+        self.variables: list[model.Variable] = []
+        self.methods: dict[int, model.ExternalMethod] = {}
+        self.counter = 0
 
     def fresh_path(self, hint: str) -> str:
         """A unique key prefix for variables of an instance that has no name of its own."""
@@ -76,8 +79,8 @@ class ResolveContext:
         return f"{hint}#{self.counter}"
 
 
-@dataclass(frozen=True)
-class KeepValue:
+@node
+class KeepValue(Node):
     """A ``keep(it.a.b == value)`` reduced to the member path below ``it`` and the value's syntax."""
 
     path: tuple[str, ...]
@@ -85,8 +88,3 @@ class KeepValue:
     scope: Scope
     location: syntax.Location
     is_default: bool = False
-
-
-def compound_members(ctype: CompoundType) -> list[str]:
-    """Names of the parameter members of ``ctype`` in order (inherited first)."""
-    return list(ctype.fields)

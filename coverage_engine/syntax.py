@@ -1,4 +1,4 @@
-"""Syntax nodes: the parse tree of an ``.osc`` file as frozen, typed dataclasses.
+"""Syntax nodes: the parse tree of an ``.osc`` file as immutable, typed records (see :mod:`coverage_engine.nodes`).
 
 The parser (``coverage_engine.parser``) builds these in one lark Transformer and puts no meaning
 into them: names are not looked up, units are not converted, nothing is evaluated. The resolver
@@ -7,8 +7,6 @@ into them: names are not looked up, units are not converted, nothing is evaluate
 """
 
 from __future__ import annotations
-
-from dataclasses import field
 
 from coverage_engine.nodes import Node, node
 
@@ -438,4 +436,6 @@ class CompilationUnit(Node):
     file: str
     imports: tuple[Import, ...]
     declarations: tuple[Declaration, ...]
-    text: str = field(repr=False, default="")
+    text: str = ""
+
+    _hidden_in_repr = ("text",)

@@ -13,6 +13,7 @@ import re
 from coverage_engine import syntax as s
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.lexer import Token
+from coverage_engine.nodes import replace
 from coverage_engine.strings import unescape_string
 
 # Names the reference reserves for features we do not implement; written like a call they would
@@ -105,11 +106,7 @@ class BehaviorExpressionRules:
     # ------------------------------------------------------------------ behaviours
 
     def labelled(self, children):
-        behavior = children[-1]
-        fields = {f: getattr(behavior, f) for f in behavior.__dataclass_fields__}
-        fields["label"] = self.name(children[0])
-        fields["location"] = self.loc(children)
-        return type(behavior)(**fields)
+        return replace(children[-1], label=self.name(children[0]), location=self.loc(children))
 
     def composite(self, children):
         arguments: tuple = ()
@@ -222,8 +219,7 @@ class BehaviorExpressionRules:
         adjacent = operand.location.start_pos == op.end_pos
         if op.value == "+":
             if adjacent and isinstance(operand, (s.Literal, s.PhysicalLiteral)):
-                fields = {f: getattr(operand, f) for f in operand.__dataclass_fields__}
-                return type(operand)(**{**fields, "location": loc})
+                return replace(operand, location=loc)
             return operand
         if op.value == "-" and adjacent:
             if isinstance(operand, s.Literal) and operand.kind in ("int", "float"):

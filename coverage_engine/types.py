@@ -6,8 +6,6 @@ expression or a YAML override). They carry no syntax nodes except the declaratio
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from coverage_engine import syntax
 from coverage_engine.model import EnumValue
 
@@ -15,6 +13,7 @@ from coverage_engine.model import EnumValue
 class OscType:
     """Base of every type; ``name`` as users write it, ``kind`` what sort of type it is."""
 
+    __slots__ = ()
     name: str
     kind: str
 
@@ -22,107 +21,112 @@ class OscType:
         return self.name
 
 
-@dataclass(eq=False)
 class PrimitiveType(OscType):
     """``int``, ``uint``, ``float``, ``bool``, ``string``."""
 
-    name: str
-    kind: str = "primitive"
+    __slots__ = ("name", "kind")
+
+    def __init__(self, name: str) -> None:
+        self.name, self.kind = name, "primitive"
+
+    def __repr__(self) -> str:
+        return f"PrimitiveType({self.name!r})"
 
 
-@dataclass(eq=False)
 class PhysicalType(OscType):
     """A quantity with SI exponents (``length``: m¹); values are floats in the SI base unit."""
 
-    name: str
-    exponents: tuple[tuple[str, int], ...]
-    location: syntax.Location | None = None
-    kind: str = "physical"
+    __slots__ = ("name", "kind", "exponents", "location")
+
+    def __init__(self, name: str, exponents: tuple[tuple[str, int], ...],
+                 location: syntax.Location | None = None) -> None:
+        self.name, self.kind, self.exponents, self.location = name, "physical", exponents, location
+
+    def __repr__(self) -> str:
+        return f"PhysicalType({self.name!r}, {self.exponents!r})"
 
 
-@dataclass(eq=False)
 class Unit:
     """A unit of a physical type: ``value_si = number * factor + offset``."""
 
-    name: str
-    physical: PhysicalType
-    factor: float
-    offset: float
-    location: syntax.Location | None = None
+    __slots__ = ("name", "physical", "factor", "offset", "location")
+
+    def __init__(self, name: str, physical: PhysicalType, factor: float, offset: float,
+                 location: syntax.Location | None = None) -> None:
+        self.name, self.physical, self.factor, self.offset, self.location = name, physical, factor, offset, location
 
 
-@dataclass(eq=False)
 class EnumType(OscType):
     """An enum with its members (name → number) in declaration order."""
 
-    name: str
-    members: dict[str, int]
-    location: syntax.Location | None = None
-    kind: str = "enum"
+    __slots__ = ("name", "kind", "members", "location")
+
+    def __init__(self, name: str, members: dict[str, int], location: syntax.Location | None = None) -> None:
+        self.name, self.kind, self.members, self.location = name, "enum", members, location
 
     def value(self, member: str) -> EnumValue:
         return EnumValue(member, self.members[member])
 
 
-@dataclass(eq=False)
 class ListType(OscType):
     """``list of element``."""
 
-    element: OscType
-    kind: str = "list"
+    __slots__ = ("element", "kind")
+
+    def __init__(self, element: OscType) -> None:
+        self.element, self.kind = element, "list"
 
     @property
     def name(self) -> str:  # type: ignore[override]
         return f"list of {self.element.name}"
 
 
-@dataclass(eq=False)
 class FieldDecl:
     """A parameter member of a compound type (``x: length = 1m``)."""
 
-    name: str
-    type: OscType
-    default: syntax.Expression | None
-    with_members: tuple
-    owner: CompoundType
-    location: syntax.Location
+    __slots__ = ("name", "type", "default", "with_members", "owner", "location")
+
+    def __init__(self, name: str, type_: OscType, default: syntax.Expression | None, with_members: tuple,
+                 owner: CompoundType, location: syntax.Location) -> None:
+        self.name, self.type, self.default, self.with_members = name, type_, default, with_members
+        self.owner, self.location = owner, location
 
 
-@dataclass(eq=False)
 class VarDecl:
     """A ``var`` member of a compound type."""
 
-    name: str
-    type: OscType
-    initial: syntax.Expression | None
-    owner: CompoundType
-    location: syntax.Location
+    __slots__ = ("name", "type", "initial", "owner", "location")
+
+    def __init__(self, name: str, type_: OscType, initial: syntax.Expression | None, owner: CompoundType,
+                 location: syntax.Location) -> None:
+        self.name, self.type, self.initial, self.owner, self.location = name, type_, initial, owner, location
 
 
-@dataclass(eq=False)
 class CompoundType(OscType):
     """A struct, actor, action, scenario or modifier; members are merged with the parent's, parent first.
 
-    ``qualified`` is the declared name (``robot.move``); ``name`` its last part as users refer to it
-    inside an actor, ``qualified`` otherwise.
+    ``qualified`` is the declared name (``robot.move``), also its ``name``. Members are filled in by
+    :mod:`coverage_engine.namespace` after every name is registered.
     """
 
-    kind: str
-    qualified: str
-    declaration: syntax.TypeDecl | None
-    parent: CompoundType | None = None
-    fields: dict[str, FieldDecl] = field(default_factory=dict)
-    variables: dict[str, VarDecl] = field(default_factory=dict)
-    events: dict[str, syntax.EventDecl] = field(default_factory=dict)
-    methods: dict[str, syntax.MethodDecl] = field(default_factory=dict)
-    keeps: list[syntax.KeepConstraint] = field(default_factory=list)
-    modifiers: list[syntax.ModifierInvocation] = field(default_factory=list)
-    body: syntax.DoDirective | None = None
-    behaviors: dict[str, CompoundType] = field(default_factory=dict)
+    def __init__(self, kind: str, qualified: str, declaration: syntax.TypeDecl | None,
+                 parent: CompoundType | None = None) -> None:
+        self.kind, self.qualified, self.declaration, self.parent = kind, qualified, declaration, parent
+        self.fields: dict[str, FieldDecl] = {}
+        self.variables: dict[str, VarDecl] = {}
+        self.events: dict[str, syntax.EventDecl] = {}
+        self.methods: dict[str, syntax.MethodDecl] = {}
+        self.keeps: list[syntax.KeepConstraint] = []
+        self.modifiers: list[syntax.ModifierInvocation] = []
+        self.body: syntax.DoDirective | None = None
+        self.behaviors: dict[str, CompoundType] = {}
 
     @property
     def name(self) -> str:  # type: ignore[override]
         return self.qualified
+
+    def __repr__(self) -> str:
+        return f"CompoundType({self.kind} {self.qualified})"
 
     def ancestry(self) -> list[CompoundType]:
         """This type and its parents, nearest first."""

@@ -1,4 +1,4 @@
-"""Shared helpers of the batch and queue tests: a scriptable child, the real CLI, fresh stores.
+"""Shared helpers of the batch and queue tests: a scriptable child and the real CLI.
 
 The child (:data:`CHILD`) reads directives from the scenario file it is given (``key=value`` lines):
 ``sleep``, ``exit``, ``xml`` (pass, fail, error, garbage, none, empty, two), ``print``, ``output_mb``,
@@ -12,14 +12,9 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import uuid
 from collections import Counter
-from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
-
-PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
 BIN = Path(sys.executable).parent
 CLI = str(BIN / "scenario_batch_execution")
 
@@ -127,29 +122,3 @@ def ledger(tmp_path: Path) -> Counter:
 
 def sqlite_url(tmp_path: Path) -> str:
     return f"sqlite:///{tmp_path / 'store.db'}"
-
-
-@pytest.fixture
-def pg_url() -> Iterator[str]:
-    """A fresh PostgreSQL database for one test, dropped afterwards."""
-    import psycopg
-
-    name = f"test_batch_{uuid.uuid4().hex[:12]}"
-    try:
-        admin = psycopg.connect(PG_ADMIN_URL, autocommit=True, connect_timeout=5)
-    except psycopg.OperationalError as exc:  # the CI machine runs one; a missing server is a failure
-        pytest.fail(f"PostgreSQL at {PG_ADMIN_URL} is not reachable: {exc}")
-    with admin:
-        admin.execute(f'CREATE DATABASE "{name}"')
-        try:
-            yield f"postgresql+psycopg://postgres@127.0.0.1:5432/{name}"
-        finally:
-            admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
-
-
-@pytest.fixture(params=["sqlite", "postgresql"])
-def store_url(request, tmp_path) -> str:
-    """The same test on a fresh SQLite file and on a fresh PostgreSQL database."""
-    if request.param == "sqlite":
-        return sqlite_url(tmp_path)
-    return request.getfixturevalue("pg_url")

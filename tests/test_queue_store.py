@@ -7,13 +7,15 @@ import sys
 import time
 
 import pytest
-from batch_fixtures import pg_url, sqlite_url, store_url  # noqa: F401 - fixtures
+from batch_fixtures import sqlite_url
 
 from store import states
 from store.database import StoreError
 from store.jobs import BatchOptions, JobResult, JobSpec, WorkerIdentity
 from store.queue import LeaseLost, QueueStore
 from store.states import JobState, Transition, TransitionError
+
+pytest_plugins = ["batch_stores"]            # the store_url and pg_url fixtures
 
 
 def _store(url: str, count: int = 5, mode: str = "local"):

@@ -100,6 +100,9 @@ def _default_ours() -> str:
 def timed(argv: list[str], cwd: Path) -> tuple[float, str]:
     """Wall time and output of one run; raises if the command fails."""
     env = dict(os.environ, PYTHONPATH=str(cwd))
+    # Measure both installs as users run them, with cached bytecode (pip precompiles the reference's
+    # site-packages; ours is an editable checkout whose cache the first run writes).
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     start = time.perf_counter()
     done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
     elapsed = time.perf_counter() - start

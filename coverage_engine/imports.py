@@ -15,20 +15,58 @@ from coverage_engine.errors import ImportResolutionError, OscError
 
 _parsed_cache: dict[tuple[str, float], syntax.CompilationUnit] = {}
 
+#: Files whose content shapes a parsed unit; a change to any of them invalidates the disk cache.
+_PARSER_FILES = ("grammar.lark", "syntax.py", "nodes.py", "transformer.py", "transformer_expr.py", "strings.py")
+
+
+def _disk_cache_path(path: Path, stat: os.stat_result) -> Path:
+    """Where the parsed form of an imported file is kept between runs (next to the parser tables)."""
+    import hashlib
+
+    from coverage_engine.lalr import _cache_file
+
+    here = Path(__file__).resolve().parent
+    parts = [str(path), str(stat.st_mtime_ns), str(stat.st_size)]
+    parts += [str(os.stat(here / name).st_mtime_ns) for name in _PARSER_FILES]
+    digest = hashlib.sha256("|".join(parts).encode()).hexdigest()
+    return _cache_file("unit" + digest).with_suffix(".unit")
+
 
 def _parse_cached(path: Path) -> syntax.CompilationUnit:
+    """Parse an imported file once per process, and keep its syntax tree on disk between processes.
+
+    Libraries such as ``osc.types`` are imported by nearly every scenario; reading their pickled tree
+    costs a fraction of parsing them again.
+    """
+    import pickle
+
     from coverage_engine.parser import parse_file
 
     resolved = path.resolve()
     try:
-        mtime = os.stat(resolved).st_mtime
+        stat = os.stat(resolved)
     except OSError as exc:
         raise OscError(f"cannot read {path}: {exc.strerror}") from exc
-    key = (str(resolved), mtime)
+    key = (str(resolved), stat.st_mtime)
     unit = _parsed_cache.get(key)
-    if unit is None:
+    if unit is not None:
+        return unit
+    cache = _disk_cache_path(resolved, stat)
+    try:
+        with open(cache, "rb") as handle:
+            unit = pickle.load(handle)
+    except (OSError, pickle.PickleError, EOFError, AttributeError, ValueError, TypeError, ImportError):
+        unit = None
+    if not isinstance(unit, syntax.CompilationUnit):
         unit = parse_file(resolved)
-        _parsed_cache[key] = unit
+        try:
+            tmp = cache.with_suffix(f".{os.getpid()}.tmp")
+            with open(tmp, "wb") as handle:
+                pickle.dump(unit, handle, protocol=pickle.HIGHEST_PROTOCOL)
+            os.replace(tmp, cache)
+        except OSError:
+            pass  # no writable temporary folder: parse again next time
+    _parsed_cache[key] = unit
     return unit
 
 

@@ -21,14 +21,12 @@ _PARSER_FILES = ("grammar.lark", "syntax.py", "nodes.py", "transformer.py", "tra
 
 def _disk_cache_path(path: Path, stat: os.stat_result) -> Path:
     """Where the parsed form of an imported file is kept between runs (next to the parser tables)."""
-    import hashlib
-
-    from coverage_engine.lalr import _cache_file
+    from coverage_engine.lalr import _cache_file, text_digest
 
     here = Path(__file__).resolve().parent
     parts = [str(path), str(stat.st_mtime_ns), str(stat.st_size)]
     parts += [str(os.stat(here / name).st_mtime_ns) for name in _PARSER_FILES]
-    digest = hashlib.sha256("|".join(parts).encode()).hexdigest()
+    digest = text_digest("|".join(parts))
     return _cache_file("unit" + digest).with_suffix(".unit")
 
 

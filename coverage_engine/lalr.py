@@ -12,7 +12,6 @@ the parser state, which :mod:`coverage_engine.syntax_errors` turns into our erro
 
 from __future__ import annotations
 
-import hashlib
 import os
 import pickle
 import sys
@@ -45,6 +44,14 @@ class ParseFailure(Exception):
         super().__init__("parse failure")
         self.state, self.expected, self.token = state, expected, token
         self.pos, self.line, self.column = pos, line, column
+
+
+def text_digest(text: str) -> str:
+    """A 64-bit hex digest for cache file names (zlib's checksums: ``hashlib`` costs ms to import)."""
+    import zlib
+
+    data = text.encode()
+    return f"{zlib.crc32(data):08x}{zlib.adler32(data):08x}"
 
 
 def _cache_file(digest: str) -> Path:
@@ -107,7 +114,7 @@ def tables() -> Tables:
     if _TABLES is not None:
         return _TABLES
     grammar_text = GRAMMAR_PATH.read_text(encoding="utf-8")
-    digest = hashlib.sha256(f"{FORMAT}\n{grammar_text}".encode()).hexdigest()
+    digest = text_digest(f"{FORMAT}\n{grammar_text}")
     cache = _cache_file(digest)
     try:
         with open(cache, "rb") as handle:

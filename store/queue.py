@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 
-from sqlalchemy import Connection, Engine, func, insert, select, update
+from sqlalchemy import Connection, Engine, func, insert, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 
+from store import queue_sql as sql
 from store import states
 from store.database import StoreError, ensure_schema, open_engine
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
@@ -32,20 +33,12 @@ DEFAULT_LEASE = 60.0
 #: Lease expirations after which a job ends as ``error`` instead of being queued again.
 DEFAULT_MAX_LOST = 3
 
-#: Columns handed out with a job; the large result columns are read only for reports.
-_JOB_COLUMNS = [c for c in jobs.c if c.name not in ("junit_xml", "log_tail", "scenario_text")]
-
-
 class LeaseLost(StoreError):
     """The job is no longer held by this worker (its lease expired and was taken over, or it ended)."""
 
 
 class StoreUnavailable(StoreError):
     """The store could not be reached or was busy; the operation may be retried later."""
-
-
-def _values(states_: Iterable[JobState]) -> list[str]:
-    return sorted(s.value for s in states_)
 
 
 class QueueStore(QueueQueries):
@@ -98,17 +91,13 @@ class QueueStore(QueueQueries):
     def _move(conn: Connection, transition: Transition, target: JobState, where: Sequence,
               values: dict, returning: Sequence = ()) -> list:
         """Run the one guarded UPDATE of ``transition``; return the rows it changed (ids or ``returning``)."""
-        states.check(transition, target)
-        stmt = (update(jobs)
-                .where(jobs.c.status.in_(_values(states.sources(transition))), *where)
-                .values(status=target.value, **values)
-                .returning(*(returning or [jobs.c.id])))
-        return conn.execute(stmt).all()
+        stmt = sql.guarded_update(transition, target, *where).values(**values)
+        return conn.execute(stmt.returning(*(returning or [jobs.c.id]))).all()
 
     @staticmethod
-    def _holder(job: Job) -> list:
-        """The guard that makes a result count only from the lease holder of this very attempt."""
-        return [jobs.c.id == job.id, jobs.c.worker_id == job.worker_id, jobs.c.attempts == job.attempts]
+    def _holder(job: Job) -> dict:
+        """Bind values of :data:`store.queue_sql.HOLDER` for the attempt ``job`` holds."""
+        return {"g_job": job.id, "g_holder": job.worker_id, "g_attempt": job.attempts}
 
     # ----------------------------------------------------------------- batches
     def create_batch(self, *, mode: str, input_dir: str, output_dir: str, host: str,
@@ -145,21 +134,13 @@ class QueueStore(QueueQueries):
               shared_only: bool = False, lease: float = DEFAULT_LEASE) -> list[Job]:
         """Take up to ``limit`` queued jobs (lowest batch, then file order) and a lease on each."""
         now = time.time()
-        pick = select(jobs.c.id).where(jobs.c.status == JobState.QUEUED.value)
+        scope = "batch" if batch_id is not None else "shared" if shared_only else "any"
+        params = {"b_limit": limit, "b_worker": worker.id, "b_host": worker.host, "b_pid": worker.pid,
+                  "b_lease": now + lease, "b_now": now}
         if batch_id is not None:
-            pick = pick.where(jobs.c.batch_id == batch_id)
-        elif shared_only:
-            pick = pick.where(jobs.c.batch_id.in_(select(batches.c.id).where(batches.c.mode == "shared")))
-        # A CTE, not "id IN (subquery)": PostgreSQL may rescan such a subquery per row and lock more rows
-        # than the LIMIT; a CTE with FOR UPDATE is always evaluated once.
-        picked = (pick.order_by(jobs.c.batch_id, jobs.c.seq).limit(limit)
-                  .with_for_update(skip_locked=True, of=jobs).cte("picked"))
+            params["g_batch"] = batch_id
         with self._tx() as conn:
-            rows = self._move(conn, Transition.CLAIM, JobState.RUNNING, [jobs.c.id == picked.c.id],
-                              dict(attempts=jobs.c.attempts + 1, worker_id=worker.id, worker_host=worker.host,
-                                   worker_pid=worker.pid, child_pid=None, lease_expires_at=now + lease,
-                                   started_at=now, finished_at=None, reason=None),
-                              returning=_JOB_COLUMNS)
+            rows = conn.execute(sql.claim_statement(scope), params).all()
         claimed = [Job.from_row(r._mapping) for r in rows]
         claimed.sort(key=lambda j: (j.batch_id, j.seq))
         return claimed
@@ -167,43 +148,39 @@ class QueueStore(QueueQueries):
     def started(self, job: Job, child_pid: int) -> bool:
         """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
         with self._tx() as conn:
-            stmt = update(jobs).where(jobs.c.status == JobState.RUNNING.value, *self._holder(job)) \
-                .values(child_pid=child_pid)
-            return conn.execute(stmt).rowcount == 1
+            return conn.execute(sql.STARTED, {**self._holder(job), "b_child": child_pid}).rowcount == 1
 
     def heartbeat(self, worker: WorkerIdentity, lease: float = DEFAULT_LEASE) -> set[int]:
         """Extend the leases of every job ``worker`` runs; returns the ids it still holds."""
         with self._tx() as conn:
-            rows = conn.execute(update(jobs)
-                                .where(jobs.c.worker_id == worker.id, jobs.c.status == JobState.RUNNING.value)
-                                .values(lease_expires_at=time.time() + lease).returning(jobs.c.id)).all()
+            rows = conn.execute(sql.HEARTBEAT, {"g_worker": worker.id, "b_lease": time.time() + lease}).all()
         return {r[0] for r in rows}
 
     def finish(self, job: Job, result: JobResult) -> None:
         """Record the verdict of the attempt ``job`` holds; :class:`LeaseLost` if it is not ours any more."""
-        self._end(job, result, Transition.FINISH, result.status, {})
+        self._end(job, result, Transition.FINISH, result.status)
 
     def retry(self, job: Job, result: JobResult) -> None:
         """Record a failed attempt and queue the job again (infrastructure errors with retries left)."""
-        self._end(job, result, Transition.RETRY, JobState.QUEUED,
-                  dict(retried=jobs.c.retried + 1, lease_expires_at=None))
+        self._end(job, result, Transition.RETRY, JobState.QUEUED)
 
     def cancel(self, job: Job, result: JobResult) -> None:
         """Record an attempt stopped by the user; ``--resume`` runs the job again."""
-        self._end(job, result, Transition.CANCEL, JobState.CANCELLED, dict(lease_expires_at=None))
+        self._end(job, result, Transition.CANCEL, JobState.CANCELLED)
 
-    def _end(self, job: Job, result: JobResult, transition: Transition, target: JobState, extra: dict) -> None:
-        values = dict(exit_code=result.exit_code, finished_at=result.finished_at, duration=result.duration,
-                      reason=result.reason, junit_xml=result.junit_xml, log_tail=result.log_tail,
-                      output_dir=result.output_dir, lease_expires_at=None)
-        values.update(extra)
+    def _end(self, job: Job, result: JobResult, transition: Transition, target: JobState) -> None:
+        states.check(transition, target)
+        params = {**self._holder(job), "b_status": target.value, "b_exit": result.exit_code,
+                  "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
+                  "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
         with self._tx() as conn:
-            if not self._move(conn, transition, target, self._holder(job), values):
+            if conn.execute(sql.end_statement(transition), params).rowcount != 1:
                 raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
-            conn.execute(insert(job_attempts).values(
-                job_id=job.id, attempt=job.attempts, outcome=result.status.value, exit_code=result.exit_code,
-                started_at=result.started_at, finished_at=result.finished_at, worker_id=job.worker_id,
-                host=job.worker_host, log_path=result.log_path, reason=result.reason))
+            conn.execute(sql.INSERT_ATTEMPT, {
+                "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
+                "exit_code": result.exit_code, "started_at": result.started_at,
+                "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
+                "log_path": result.log_path, "reason": result.reason})
 
     def halt(self, batch_id: int, reason: str = "not started: the batch was halted") -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""

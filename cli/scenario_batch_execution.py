@@ -151,7 +151,7 @@ def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_fo
             store.batch(batch_id)
         settings = WorkerSettings(slots=slots, batch_id=batch_id, lease=lease, poll=poll,
                                   output_root=os.path.abspath(output_root) if output_root else None,
-                                  wait_for_work=wait_for_work, cwd=os.getcwd())
+                                  wait_for_work=wait_for_work, cwd=os.getcwd(), die_with_parent=True)
         summary, signum = run_worker(store, settings, PlainReporter())
     finally:
         store.close()

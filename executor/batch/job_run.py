@@ -50,7 +50,8 @@ class JobRun:
     """Run one claimed job in a thread; ``cancel`` stops it (from the worker loop's thread)."""
 
     def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
-                 events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None) -> None:
+                 events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None,
+                 die_with_parent: bool = False) -> None:
         self.job = job
         self.batch = batch
         self.output_dir = output_dir
@@ -58,6 +59,7 @@ class JobRun:
         self.events = events
         self.cwd = cwd
         self.echo = echo
+        self.die_with_parent = die_with_parent
         self.lost = False                     # set when the lease was taken over: the result is dropped
         self._child: ChildProcess | None = None
         self._lock = threading.Lock()
@@ -97,7 +99,7 @@ class JobRun:
         mark = FileMark.of(self.output_dir / RESULT_FILE)
         argv = substitute(self.batch.command, self.scenario_path, str(self.output_dir))
         child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
-                             grace=options.grace, echo=self.echo)
+                             grace=options.grace, echo=self.echo, die_with_parent=self.die_with_parent)
         with self._lock:
             if self._cancel_grace is not None:
                 now = time.time()

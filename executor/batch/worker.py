@@ -45,6 +45,7 @@ class WorkerSettings:
     wait_for_work: bool = False          # keep waiting for new batches instead of ending when idle
     echo: BinaryIO | None = None         # copy the children's output here (``-j 1``)
     cwd: str | None = None
+    die_with_parent: bool = False        # children get SIGKILL when this process dies (costs a fork)
 
 
 @dataclass
@@ -186,7 +187,8 @@ class Worker:
         output_dir = root / job.name
         scenario = self._scenario_file(job, batch, output_dir)
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
-                     echo=self.settings.echo if self.settings.slots == 1 else None)
+                     echo=self.settings.echo if self.settings.slots == 1 else None,
+                     die_with_parent=self.settings.die_with_parent)
         self._runs[job.id] = run
         self._started += 1
         self.reporter.job_started(job)

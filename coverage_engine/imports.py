@@ -21,13 +21,13 @@ _PARSER_FILES = ("grammar.lark", "syntax.py", "nodes.py", "transformer.py", "tra
 
 def _disk_cache_path(path: Path, stat: os.stat_result) -> Path:
     """Where the parsed form of an imported file is kept between runs (next to the parser tables)."""
-    from coverage_engine.lalr import _cache_file, text_digest
+    from coverage_engine.cache import cache_file, text_digest
 
     here = Path(__file__).resolve().parent
     parts = [str(path), str(stat.st_mtime_ns), str(stat.st_size)]
     parts += [str(os.stat(here / name).st_mtime_ns) for name in _PARSER_FILES]
     digest = text_digest("|".join(parts))
-    return _cache_file("unit" + digest).with_suffix(".unit")
+    return cache_file("unit" + digest, ".unit")
 
 
 def _parse_cached(path: Path) -> syntax.CompilationUnit:
@@ -36,8 +36,7 @@ def _parse_cached(path: Path) -> syntax.CompilationUnit:
     Libraries such as ``osc.types`` are imported by nearly every scenario; reading their pickled tree
     costs a fraction of parsing them again.
     """
-    import pickle
-
+    from coverage_engine import cache
     from coverage_engine.parser import parse_file
 
     resolved = path.resolve()
@@ -49,21 +48,11 @@ def _parse_cached(path: Path) -> syntax.CompilationUnit:
     unit = _parsed_cache.get(key)
     if unit is not None:
         return unit
-    cache = _disk_cache_path(resolved, stat)
-    try:
-        with open(cache, "rb") as handle:
-            unit = pickle.load(handle)
-    except (OSError, pickle.PickleError, EOFError, AttributeError, ValueError, TypeError, ImportError):
-        unit = None
-    if not isinstance(unit, syntax.CompilationUnit):
+    cache_path = _disk_cache_path(resolved, stat)
+    unit = cache.load(cache_path, syntax.CompilationUnit)
+    if unit is None:
         unit = parse_file(resolved)
-        try:
-            tmp = cache.with_suffix(f".{os.getpid()}.tmp")
-            with open(tmp, "wb") as handle:
-                pickle.dump(unit, handle, protocol=pickle.HIGHEST_PROTOCOL)
-            os.replace(tmp, cache)
-        except OSError:
-            pass  # no writable temporary folder: parse again next time
+        cache.store(cache_path, unit)
     _parsed_cache[key] = unit
     return unit
 

@@ -12,11 +12,10 @@ the parser state, which :mod:`coverage_engine.syntax_errors` turns into our erro
 
 from __future__ import annotations
 
-import os
-import pickle
-import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+from coverage_engine.cache import cache_file, load, store, text_digest
 
 GRAMMAR_PATH = Path(__file__).resolve().parent / "grammar.lark"
 FORMAT = 2
@@ -44,25 +43,6 @@ class ParseFailure(Exception):
         super().__init__("parse failure")
         self.state, self.expected, self.token = state, expected, token
         self.pos, self.line, self.column = pos, line, column
-
-
-def text_digest(text: str) -> str:
-    """A 64-bit hex digest for cache file names (zlib's checksums: ``hashlib`` costs ms to import)."""
-    import zlib
-
-    data = text.encode()
-    return f"{zlib.crc32(data):08x}{zlib.adler32(data):08x}"
-
-
-def _cache_file(digest: str) -> Path:
-    user = os.environ.get("USER") or str(os.getuid() if hasattr(os, "getuid") else "user")
-    name = f".osc_lalr_{user}_{digest[:20]}_{sys.version_info[0]}{sys.version_info[1]}.pickle"
-    base = os.environ.get("TMPDIR") or ("/tmp" if os.name == "posix" else None)
-    if base is None:  # tempfile costs a few ms to import; only where /tmp does not exist
-        import tempfile
-
-        base = tempfile.gettempdir()
-    return Path(base) / name
 
 
 def _build(grammar_text: str) -> Tables:
@@ -114,24 +94,13 @@ def tables() -> Tables:
     if _TABLES is not None:
         return _TABLES
     grammar_text = GRAMMAR_PATH.read_text(encoding="utf-8")
-    digest = text_digest(f"{FORMAT}\n{grammar_text}")
-    cache = _cache_file(digest)
-    try:
-        with open(cache, "rb") as handle:
-            loaded = pickle.load(handle)
-        if isinstance(loaded, Tables):
-            _TABLES = loaded
-            return loaded
-    except (OSError, pickle.PickleError, EOFError, AttributeError, ValueError):
-        pass
+    cache = cache_file(text_digest(f"{FORMAT}\n{grammar_text}"))
+    loaded = load(cache, Tables)
+    if loaded is not None:
+        _TABLES = loaded
+        return loaded
     built = _build(grammar_text)
-    try:
-        tmp = cache.with_suffix(f".{os.getpid()}.tmp")
-        with open(tmp, "wb") as handle:
-            pickle.dump(built, handle, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(tmp, cache)
-    except OSError:
-        pass  # no writable temp dir: build again next time
+    store(cache, built)
     _TABLES = built
     return built
 

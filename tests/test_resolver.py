@@ -274,3 +274,17 @@ def test_sce_parameters_apply_under_command_line_overrides():
     assert merge_overrides(recorded, {"test": {"name": "b"}}) == {
         "test": {"speed": 3.5, "name": "b"}, "other": {"x": 1}}
     assert recorded["test"]["name"] == "a"
+
+
+def test_parsing_and_resolving_never_import_the_runtime(project_root):
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "from coverage_engine.loader import load_scenario_file\n"
+            "load_scenario_file(sys.argv[1])\n"
+            "heavy = [m for m in ('py_trees', 'rich', 'sqlalchemy', 'junit_xml') if m in sys.modules]\n"
+            "assert not heavy, heavy\n")
+    done = subprocess.run([sys.executable, "-c", code, str(project_root / "examples/hello_world/hello_world.osc")],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr

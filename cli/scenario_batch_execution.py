@@ -212,7 +212,10 @@ SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": rep
 
 
 def _fail(message: str, code: int) -> int:
-    click.echo(f"{PROG}: error: {message}", err=True)
+    """Print ``message`` as one line (driver errors span several; SQLAlchemy adds a link line)."""
+    lines = [line.strip() for line in str(message).splitlines()
+             if line.strip() and not line.startswith("(Background on this error")]
+    click.echo(f"{PROG}: error: {' '.join(lines)}", err=True)
     return code
 
 
@@ -227,7 +230,7 @@ def main(argv: list[str] | None = None) -> None:
     debug = "-d" in options or "--debug" in options
     try:
         code = command.main(args, prog_name=prog, standalone_mode=False)
-    except click.exceptions.Abort:
+    except (click.exceptions.Abort, KeyboardInterrupt):
         code = 130
     except click.UsageError as exc:
         code = _fail(exc.format_message(), EXIT_USAGE)

@@ -5,6 +5,7 @@ They are plain data built from database rows with ``from_row``; all SQL stays in
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import socket
@@ -136,18 +137,41 @@ class JobResult:
 
 @dataclass(frozen=True)
 class WorkerIdentity:
-    """Who holds a lease: a unique id plus the host and process, so a dead local holder can be detected."""
+    """Who holds a lease: a unique id plus the host and process, so a dead local holder can be detected.
+
+    The id is ``host:pid:node:nonce``; ``node`` names this boot of this machine and its process-id
+    namespace, so process ids recorded by another container or before a reboot are never taken for
+    processes here (they must not be signalled).
+    """
 
     id: str
     host: str
     pid: int
+    node: str = ""
 
     @classmethod
     def current(cls) -> WorkerIdentity:
         """This process; the host name comes from ``$SCENARIO_WORKER_HOST`` if set (e.g. a node name)."""
         host = os.environ.get("SCENARIO_WORKER_HOST") or socket.gethostname()
         pid = os.getpid()
-        return cls(id=f"{host}:{pid}:{uuid.uuid4().hex[:8]}", host=host, pid=pid)
+        node = _node_token()
+        return cls(id=f"{host}:{pid}:{node}:{uuid.uuid4().hex[:8]}", host=host, pid=pid, node=node)
+
+    def same_node(self, worker_id: str | None) -> bool:
+        """Whether ``worker_id`` was issued on this machine, boot and process namespace."""
+        parts = (worker_id or "").split(":")
+        return len(parts) == 4 and parts[0] == self.host and parts[2] == self.node and bool(self.node)
+
+
+def _node_token() -> str:
+    """A short token for this boot of this machine and this process-id namespace ('' if unknown)."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id", encoding="ascii") as handle:
+            boot = handle.read().strip()
+        namespace = os.stat("/proc/self/ns/pid").st_ino
+    except OSError:
+        return ""
+    return hashlib.sha256(f"{boot}/{namespace}".encode()).hexdigest()[:10]
 
 
 @dataclass(frozen=True)

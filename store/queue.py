@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 
 from sqlalchemy import Connection, Engine, func, insert, select
@@ -193,6 +193,16 @@ class QueueStore(QueueQueries):
         with self._tx() as conn:
             return len(self._move(conn, Transition.RESUME, JobState.QUEUED, [jobs.c.batch_id == batch_id],
                                   dict(reason=None)))
+
+    def release(self, worker: WorkerIdentity, job_ids: Iterable[int]) -> int:
+        """Give back jobs ``worker`` holds but never started (a claim whose commit reply was lost)."""
+        ids = sorted(job_ids)
+        if not ids:
+            return 0
+        with self._tx() as conn:
+            return len(self._move(conn, Transition.RECLAIM, JobState.QUEUED,
+                                  [jobs.c.worker_id == worker.id, jobs.c.id.in_(ids)],
+                                  dict(lease_expires_at=None, reason="released unstarted")))
 
     def reclaim_expired(self, max_lost: int = DEFAULT_MAX_LOST, now: float | None = None) -> list[Reclaimed]:
         """Take back running jobs whose lease expired: queue them again, or end them as ``error``."""

@@ -3,7 +3,8 @@
 The child (:data:`CHILD`) reads directives from the scenario file it is given (``key=value`` lines):
 ``sleep``, ``exit``, ``xml`` (pass, fail, error, garbage, none, empty, two), ``print``, ``output_mb``,
 ``hang`` (ignore SIGTERM and sleep), ``grandchild`` (start a sleeping grandchild in its group),
-``fail_first`` (no result on the first attempt), so each test states its jobs as data.
+``fail_first`` (no result on the first attempt), ``slow_first`` (sleep this long on the first attempt),
+so each test states its jobs as data.
 Every child that gets to its end appends ``<name> <pid>`` to the ledger named by ``$BATCH_LEDGER``.
 """
 
@@ -39,6 +40,10 @@ if "grandchild" in spec:
     code = "import os, signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(1000)"
     grand = subprocess.Popen([sys.executable, "-S", "-c", code])
     open(os.path.join(out, "grandchild.pid"), "w").write(str(grand.pid))
+if spec.get("slow_first") and not os.path.exists(os.path.join(out, "slow_first_done")):
+    open(os.path.join(out, "slow_first_done"), "w").close()
+    open(os.path.join(out, "child.pid"), "w").write(str(os.getpid()))
+    time.sleep(float(spec["slow_first"]))
 if "output_mb" in spec:
     block = b"x" * 1023 + b"\n"
     for _ in range(int(spec["output_mb"]) * 1024):

@@ -55,7 +55,7 @@ def test_all_passed_exit_zero_and_osc_files_too(tmp_path):
     write_scenarios(tmp_path / "in", {"x1": ""}, suffix=".osc")
     write_scenarios(tmp_path / "in", {"x2": ""}, suffix=".sce")
     (tmp_path / "in" / "notes.txt").write_text("not a scenario")
-    result = run_cli(["-i", "in", "-o", "deep/results", "-j", "2", "--", *child_command(child)], tmp_path)
+    result = run_cli(["-i", "in", "-o", "deep/results", "-j", "auto", "--", *child_command(child)], tmp_path)
     assert result.returncode == 0, result.stderr
     assert list(_suites(tmp_path / "deep/results/test.xml")) == ["x1", "x2"]
 
@@ -185,7 +185,7 @@ def test_halt_on_failure_starts_nothing_after_a_failure(tmp_path):
 def test_log_is_written_while_the_child_runs(tmp_path):
     for jobs in ("1", "2"):
         child = write_child(tmp_path)
-        write_scenarios(tmp_path / f"in{jobs}", {"slow": "print=early-line\nsleep=3"})
+        write_scenarios(tmp_path / f"in{jobs}", {"slow": "print=early-line\nsleep=2"})
         proc = start_cli(["-i", f"in{jobs}", "-o", f"r{jobs}", "-j", jobs, "--", *child_command(child)],
                          tmp_path, cli_env(tmp_path))
         log = tmp_path / f"r{jobs}" / "slow" / "log.txt"
@@ -206,7 +206,10 @@ def test_old_summary_kept_until_the_end_and_nothing_deleted(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"slow": "sleep=2"})
     proc = start_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, cli_env(tmp_path))
-    time.sleep(1.0)
+    deadline = time.monotonic() + 10
+    while not (results / "slow" / "log.txt").exists():          # the job is running
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.02)
     assert (results / "test.xml").read_text() == '<testsuite tests="2" failures="2"/>'
     proc.communicate(timeout=30)
     assert proc.returncode == 0
@@ -244,3 +247,21 @@ def test_incompatible_store_is_refused(tmp_path):
     result = run_cli(["-i", "in", "-o", "r", "--", *child_command(child)], tmp_path)
     assert result.returncode == 1
     assert "schema version 99" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_progress_display_only_on_a_terminal_without_no_color(monkeypatch):
+    import pty
+
+    from executor.batch.progress import PlainReporter, RichReporter, make_reporter, wants_rich
+
+    leader, follower = pty.openpty()
+    with os.fdopen(leader, "rb") as _, os.fdopen(follower, "w") as terminal, \
+            open(os.devnull, "w") as not_terminal:
+        monkeypatch.delenv("NO_COLOR", raising=False)
+        monkeypatch.setenv("TERM", "xterm")
+        assert wants_rich(terminal) and not wants_rich(not_terminal)
+        monkeypatch.setattr(sys, "stdout", terminal)
+        assert isinstance(make_reporter(4), RichReporter)
+        assert isinstance(make_reporter(1), PlainReporter)        # -j 1 shows the children's output instead
+        monkeypatch.setenv("NO_COLOR", "1")
+        assert not wants_rich(terminal) and isinstance(make_reporter(4), PlainReporter)

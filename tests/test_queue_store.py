@@ -119,6 +119,11 @@ def test_retry_cancel_halt_resume(store_url):
         assert store.resume(batch.id) == 4
         assert store.counts(batch.id)[JobState.QUEUED] == 4
         assert [a["outcome"] for a in store.attempts(job.id)] == ["error", "cancelled"]
+        other = _worker("b")
+        phantom = store.claim(other, limit=2, batch_id=batch.id)     # e.g. the commit's reply was lost
+        assert store.release(_worker("a"), [j.id for j in phantom]) == 0   # not a's to give back
+        assert store.release(other, [j.id for j in phantom]) == 2
+        assert store.counts(batch.id)[JobState.QUEUED] == 4
     finally:
         store.close()
 

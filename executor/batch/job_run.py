@@ -39,6 +39,11 @@ class Done:
     problems: list[str] = field(default_factory=list)
 
 
+def job_marker(job_id: int, attempt: int) -> str:
+    """The value of ``$SCENARIO_BATCH_JOB`` in the child of this attempt (``<job id>.<attempt>``)."""
+    return f"{job_id}.{attempt}"
+
+
 def rotate_log(output_dir: Path, attempt: int) -> None:
     """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts."""
     log = output_dir / LOG_FILE
@@ -99,7 +104,8 @@ class JobRun:
         mark = FileMark.of(self.output_dir / RESULT_FILE)
         argv = substitute(self.batch.command, self.scenario_path, str(self.output_dir))
         child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
-                             grace=options.grace, echo=self.echo, die_with_parent=self.die_with_parent)
+                             grace=options.grace, echo=self.echo, die_with_parent=self.die_with_parent,
+                             marker=job_marker(self.job.id, self.job.attempts))
         with self._lock:
             if self._cancel_grace is not None:
                 now = time.time()

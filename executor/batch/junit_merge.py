@@ -90,7 +90,10 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestS
     else:
         if len(cases) == 1:
             properties["testcase"] = cases[0].name
-            test_cases.append(_case(cases[0], name=job.name))
+            case = _case(cases[0], name=job.name)
+            if case.elapsed_sec is None:
+                case.elapsed_sec = job.duration        # the suite's time is the sum of its testcases
+            test_cases.append(case)
         else:
             test_cases.extend(_case(c) for c in cases)
         if job.status in (JobState.ERROR, JobState.TIMEOUT):

@@ -22,29 +22,38 @@ from typing import BinaryIO
 _CHUNK = 64 * 1024
 
 
-def _parent_death_signal():
-    """On Linux, a function for the child to run before exec: die (SIGKILL) when this process dies.
-
-    So a kill -9 of a worker does not leave its children running (their grandchildren are ended by
-    the next sweep on this host, which knows the process groups from the store). It costs a real
-    fork instead of vfork (about 2-3 ms per child), so the single-host run leaves it off and relies
-    on ``--resume`` ending the orphaned process groups it finds in the store.
-    """
+def _load_prctl():
     if not sys.platform.startswith("linux"):
         return None
     try:
-        prctl = ctypes.CDLL(None, use_errno=True).prctl
+        return ctypes.CDLL(None, use_errno=True).prctl
     except (OSError, AttributeError):
         return None
-    pr_set_pdeathsig = 1
+
+
+_PRCTL = _load_prctl()
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with(parent: int):
+    """On Linux, a function for the child to run before exec: die (SIGKILL) when ``parent`` dies.
+
+    So a kill -9 of a worker does not leave its children running (their grandchildren are ended by
+    the next sweep on this host, which knows the process groups from the store). If the parent died
+    between fork and this call the signal would never come, so the child checks and ends itself.
+    It costs a real fork instead of vfork (about 2-3 ms per child), so the single-host run leaves it
+    off and relies on ``--resume`` ending the orphaned process groups it finds in the store.
+    """
+    if _PRCTL is None:
+        return None
+    prctl = _PRCTL
 
     def preexec() -> None:
-        prctl(pr_set_pdeathsig, signal.SIGKILL)
+        prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != parent:
+            os.kill(os.getpid(), signal.SIGKILL)
 
     return preexec
-
-
-_PREEXEC = _parent_death_signal()
 
 
 @dataclass(frozen=True)
@@ -79,12 +88,43 @@ def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
         return False
 
 
+#: Environment variable set for every job's child: ``<job id>.<attempt>``; it also marks the process group.
+JOB_ENV = "SCENARIO_BATCH_JOB"
+
+
+def end_orphan_group(pgid: int, marker: str) -> bool:
+    """SIGKILL process group ``pgid`` if one of its processes carries ``JOB_ENV=marker``.
+
+    A recorded process id may have been reused by an unrelated process by the time a dead runner's
+    jobs are taken back, so the group is ended only when it provably belongs to that job's attempt.
+    """
+    wanted = f"{JOB_ENV}={marker}".encode()
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return False
+    for entry in entries:
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as handle:
+                fields = handle.read().rsplit(b")", 1)[1].split()
+            if int(fields[2]) != pgid:
+                continue
+            with open(f"/proc/{entry}/environ", "rb") as handle:
+                if wanted in handle.read().split(b"\0"):
+                    return kill_group(pgid)
+        except (OSError, IndexError, ValueError):
+            continue
+    return False
+
+
 class ChildProcess:
     """Start a command in a new session and wait for it; ``cancel`` may be called from another thread."""
 
     def __init__(self, argv: Sequence[str], log_path: str, *, cwd: str | None = None,
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
-                 die_with_parent: bool = False) -> None:
+                 die_with_parent: bool = False, marker: str | None = None) -> None:
         self.argv = list(argv)
         self.log_path = log_path
         self.cwd = cwd
@@ -92,6 +132,7 @@ class ChildProcess:
         self.grace = grace
         self.echo = echo
         self.die_with_parent = die_with_parent
+        self.env = None if marker is None else {**os.environ, JOB_ENV: marker}
         self.proc: subprocess.Popen[bytes] | None = None
         self._lock = threading.Lock()
         self._timers: list[threading.Timer] = []
@@ -110,8 +151,8 @@ class ChildProcess:
             self.proc = subprocess.Popen(
                 self.argv, cwd=self.cwd, stdin=subprocess.DEVNULL,
                 stdout=subprocess.PIPE if self.echo is not None else log, stderr=subprocess.STDOUT,
-                start_new_session=True, close_fds=True,
-                preexec_fn=_PREEXEC if self.die_with_parent else None)
+                env=self.env, start_new_session=True, close_fds=True,
+                preexec_fn=die_with(os.getpid()) if self.die_with_parent else None)
         if self.timeout is not None:
             self._arm(self.timeout, self._on_timeout)
         return self.proc.pid

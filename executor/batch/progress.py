@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 from typing import TextIO
 
 from store.jobs import Job, JobResult
@@ -128,12 +127,3 @@ def make_reporter(slots: int) -> Reporter:
         return RichReporter()
     return PlainReporter()
 
-
-class Clock:
-    """Elapsed wall time since creation, for summaries."""
-
-    def __init__(self) -> None:
-        self.start = time.monotonic()
-
-    def elapsed(self) -> float:
-        return time.monotonic() - self.start

@@ -8,6 +8,7 @@ because of a lost connection. The single-host run is this loop scoped to one bat
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import queue
@@ -18,8 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from executor.batch.job_run import Done, JobRun, Started
-from executor.batch.process import kill_group
+from executor.batch.job_run import Done, JobRun, Started, job_marker
+from executor.batch.process import end_orphan_group
 from executor.batch.progress import Reporter
 from store.jobs import Batch, Job, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
@@ -89,6 +90,7 @@ class Worker:
         self._pending: deque = deque()         # store writes not done yet: Started / Done events
         self._batches: dict[int, Batch] = {}
         self._halted: set[int] = set()
+        self._to_halt: set[int] = set()
         self._stop = threading.Event()
         self._force = threading.Event()
         self._cancelling = False
@@ -98,6 +100,7 @@ class Worker:
         self._retry_at = 0.0
         self._warned_unavailable = False
         self._started = 0
+        self._unsure_claims = False
 
     # ------------------------------------------------------------------ control
     def stop(self, force: bool = False) -> None:
@@ -124,7 +127,8 @@ class Worker:
             if now >= self._retry_at and now >= next_sweep:
                 if self._guard(self._sweep):
                     next_sweep = now + beat_every
-            if self._runs and now >= self._retry_at and now >= next_beat:
+            if (self._runs or self._unsure_claims) and now >= self._retry_at and \
+                    (now >= next_beat or self._unsure_claims):
                 if self._guard(self._heartbeat):
                     next_beat = now + beat_every
             if self._may_claim(now):
@@ -168,8 +172,12 @@ class Worker:
 
     def _claim(self) -> None:
         free = self.settings.slots - len(self._runs)
-        jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
-                                shared_only=self.settings.batch_id is None, lease=self.settings.lease)
+        try:
+            jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
+                                    shared_only=self.settings.batch_id is None, lease=self.settings.lease)
+        except StoreUnavailable:
+            self._unsure_claims = True      # the claim may have committed without us hearing back
+            raise
         self._claim_more = len(jobs) == free
         if not self._claim_more:
             self._next_claim = time.monotonic() + self.settings.poll
@@ -214,6 +222,10 @@ class Worker:
 
     def _heartbeat(self) -> None:
         held = self.store.heartbeat(self.identity, self.settings.lease)
+        phantoms = held - set(self._runs)
+        if phantoms:                          # claimed, but the reply never reached us: give them back
+            self.store.release(self.identity, phantoms)
+        self._unsure_claims = False
         for job_id, run in self._runs.items():
             if job_id not in held and not run.lost:
                 run.lost = True
@@ -225,15 +237,16 @@ class Worker:
         reclaimed: list[Reclaimed] = []
         dead = {j.worker_id for j in self.store.running(self.settings.batch_id,
                                                         shared_only=self.settings.batch_id is None)
-                if j.worker_host == self.identity.host and j.worker_id != self.identity.id
+                if self.identity.same_node(j.worker_id) and j.worker_id != self.identity.id
                 and not process_alive(j.worker_pid)}
         for worker_id in sorted(w for w in dead if w):
             reclaimed += self.store.reclaim_worker(worker_id, "the runner holding it ended without a result",
                                                    max_lost=self.settings.max_lost)
         reclaimed += self.store.reclaim_expired(self.settings.max_lost)
         for item in reclaimed:
-            if item.child_pid and item.worker_host == self.identity.host and item.worker_id != self.identity.id:
-                kill_group(item.child_pid)     # the orphaned child of a dead runner must not run on
+            if item.child_pid and self.identity.same_node(item.worker_id) and item.worker_id != self.identity.id:
+                # the orphaned child of a dead runner must not run on (if that group is still it)
+                end_orphan_group(item.child_pid, job_marker(item.job_id, item.attempt))
         if reclaimed:
             self._claim_more = True
 
@@ -272,6 +285,11 @@ class Worker:
             if self._guard(lambda: self._write(self._pending[0])) is None:
                 return
             self._pending.popleft()
+        while self._to_halt:
+            batch_id = min(self._to_halt)
+            if self._guard(functools.partial(self._halt, batch_id)) is None:
+                return
+            self._to_halt.discard(batch_id)
 
     def _write(self, event: Started | Done) -> None:
         run = event.run
@@ -279,11 +297,11 @@ class Worker:
             if not run.lost:
                 self.store.started(run.job, event.pid)
             return
-        self._runs.pop(run.job.id, None)
         for problem in event.problems:
             self.reporter.warn(f"{run.job.name}: {problem}")
         event.problems = []                    # said once, even if the write below has to be repeated
         if run.lost:
+            self._runs.pop(run.job.id, None)
             return
         result, job = event.result, run.job
         retrying = False
@@ -298,16 +316,18 @@ class Worker:
                 self.store.finish(job, result)
                 self.summary.verdicts[result.status] += 1
                 if result.status is not JobState.PASSED and run.batch.options.halt_on_failure:
-                    self._halt(run.batch)
+                    self._to_halt.add(run.batch.id)
         except LeaseLost as exc:
             self.reporter.warn(f"result of {job.name} refused: {exc}")
+            self._runs.pop(job.id, None)
             return
+        self._runs.pop(job.id, None)           # the slot frees only once the result is in the store
         self.reporter.job_finished(job, result, retrying=retrying)
 
-    def _halt(self, batch: Batch) -> None:
-        if batch.id not in self._halted:
-            self._halted.add(batch.id)
+    def _halt(self, batch_id: int) -> None:
+        if batch_id not in self._halted:
+            count = self.store.halt(batch_id, "not started: --halt-on-failure after a failed job")
+            self._halted.add(batch_id)
             self._claim_more = False
-            count = self.store.halt(batch.id, "not started: --halt-on-failure after a failed job")
             if count:
                 self.reporter.warn(f"halting: {count} job(s) not started (--halt-on-failure)")

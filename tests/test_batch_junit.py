@@ -1,0 +1,92 @@
+"""The merged JUnit report: totals, names, properties, and robustness against any child XML."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from executor.batch.junit_merge import merged_report, write_report
+from store.jobs import Job
+from store.states import JobState
+
+OUTCOME_TAG = {"failure": "<failure message='f'/>", "error": "<error message='e'/>",
+               "skipped": "<skipped/>", "passed": ""}
+
+
+def _job(name: str, status: JobState, xml: str | None, seq: int = 0, exit_code: int | None = 0,
+         reason: str | None = None) -> Job:
+    return Job(id=seq + 1, batch_id=1, seq=seq, name=name, scenario_path=f"/in/{name}.sce", scenario_sha="0",
+               status=status, attempts=1, exit_code=exit_code, reason=reason, duration=1.5, junit_xml=xml,
+               log_tail="last words of the log")
+
+
+def _child_xml(outcomes: list[str]) -> str:
+    cases = "".join(f"<testcase classname='c' name='t{i}' time='0.5'>{OUTCOME_TAG[o]}</testcase>"
+                    for i, o in enumerate(outcomes))
+    return f"<testsuites><testsuite name='x' tests='999' failures='999'>{cases}</testsuite></testsuites>"
+
+
+def _root(text: str) -> ET.Element:
+    return ET.fromstring(text.encode())
+
+
+def test_error_timeout_and_exit_code_cases():
+    jobs = [
+        _job("none", JobState.ERROR, None, 0, reason="no test.xml written (exit code 0)"),
+        _job("slow", JobState.TIMEOUT, None, 1, exit_code=-15, reason="timed out after 2 s"),
+        _job("rc", JobState.FAILED, _child_xml(["passed"]), 2, exit_code=3, reason="exit code 3"),
+        _job("left_out", JobState.CANCELLED, None, 3),
+        _job("queued", JobState.QUEUED, None, 4),
+    ]
+    root = _root(merged_report(jobs, {"/in/rc.sce": {"speed": 3}}))
+    suites = {s.get("name"): s for s in root.iter("testsuite")}
+    assert list(suites) == ["none", "slow", "rc"]
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("4", "1", "2")
+    assert float(root.get("time")) == 1.5 + 1.5 + 0.5          # job durations where the child gave none
+    error = suites["none"].find("testcase/error")
+    assert "exit code 0" in error.get("message") and "last words" in error.text
+    assert suites["slow"].find("testcase/error").get("type") == "timeout"
+    rc_cases = [c.get("name") for c in suites["rc"].iter("testcase")]
+    assert rc_cases == ["rc", "rc [exit code]"]
+    props = {p.get("name"): p.get("value") for p in suites["rc"].iter("property")}
+    assert props["variation.speed"] == "3" and props["exit_code"] == "3" and props["testcase"] == "t0"
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.sampled_from(sorted(OUTCOME_TAG)), min_size=1, max_size=4), min_size=1, max_size=6))
+def test_totals_are_sums_of_the_testcases(children):
+    jobs = [_job(f"j{i}", JobState.PASSED, _child_xml(outcomes), i) for i, outcomes in enumerate(children)]
+    root = _root(merged_report(jobs))
+    flat = [o for outcomes in children for o in outcomes]
+    assert int(root.get("tests")) == len(flat)
+    assert int(root.get("failures")) == flat.count("failure")
+    assert int(root.get("errors")) == flat.count("error")
+    assert abs(float(root.get("time")) - 0.5 * len(flat)) < 1e-6
+    for suite, outcomes in zip(list(root.iter("testsuite")), children, strict=True):
+        assert int(suite.get("tests")) == len(outcomes)
+        names = [c.get("name") for c in suite.iter("testcase")]
+        assert names == ([suite.get("name")] if len(outcomes) == 1 else [f"t{i}" for i in range(len(outcomes))])
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.text(max_size=200))
+def test_any_child_xml_never_breaks_the_merge(text):
+    jobs = [_job("weird", JobState.ERROR, text, reason="unreadable"), _job("ok", JobState.PASSED,
+                                                                         _child_xml(["passed"]), 1)]
+    root = _root(merged_report(jobs))
+    assert [s.get("name") for s in root.iter("testsuite")] == ["weird", "ok"]
+
+
+def test_entity_expansion_is_refused_and_report_written_atomically(tmp_path):
+    bomb = ('<?xml version="1.0"?><!DOCTYPE x [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;">]>'
+            '<testsuite><testcase name="&b;"/></testsuite>')
+    text = merged_report([_job("bomb", JobState.ERROR, bomb, reason="unreadable")])
+    assert "aaaaaaaaaa" not in text
+    target = tmp_path / "out" / "test.xml"
+    target.parent.mkdir()
+    target.write_text("old")
+    write_report(target, text)
+    assert _root(target.read_text()).get("errors") == "1"
+    assert [p.name for p in target.parent.iterdir()] == ["test.xml"]

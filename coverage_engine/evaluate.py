@@ -34,19 +34,11 @@ class EvaluationError(Exception):
         self.location = location
 
 
-def _divide(a, b):
-    if isinstance(a, int) and isinstance(b, int) and not isinstance(a, bool):
-        if b == 0:
-            raise ZeroDivisionError("division by zero")
-        return a / b if a % b else a // b
-    return a / b
-
-
 _BINARY: dict[str, Callable] = {
     "+": operator.add,
     "-": operator.sub,
     "*": operator.mul,
-    "/": _divide,
+    "/": operator.truediv,  # int / int is a float, as the resolver types it
     "%": operator.mod,
     "==": operator.eq,
     "!=": operator.ne,

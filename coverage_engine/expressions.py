@@ -170,26 +170,22 @@ def _binary(expr: syntax.BinaryOp, scope: Scope) -> TypedExpr:
     return _fold(op, (left, right), rtype, expr.location)
 
 
-def _num(t: OscType) -> bool:
-    return is_numeric(t)
-
-
 def _comparable(a: OscType, b: OscType) -> bool:
     if a is ANY or b is ANY:
         return True
-    if _num(a) and _num(b):
+    if is_numeric(a) and is_numeric(b):
         return True
     return a is b or (a.name == b.name and a.kind == b.kind)
 
 
 def _ordered(a: OscType, b: OscType) -> bool:
-    if _num(a) and _num(b):
+    if is_numeric(a) and is_numeric(b):
         return True
     return isinstance(a, PhysicalType) and a is b or (a is STRING and b is STRING)
 
 
 def _arithmetic_type(op: str, a: OscType, b: OscType) -> OscType | None:
-    if _num(a) and _num(b):
+    if is_numeric(a) and is_numeric(b):
         if op == "/":
             return FLOAT
         if a is FLOAT or b is FLOAT:
@@ -204,9 +200,9 @@ def _arithmetic_type(op: str, a: OscType, b: OscType) -> OscType | None:
         if op == "/" and a is b:
             return FLOAT
         return None
-    if pa and _num(b) and op in ("*", "/"):
+    if pa and is_numeric(b) and op in ("*", "/"):
         return a
-    if pb and _num(a) and op == "*":
+    if pb and is_numeric(a) and op == "*":
         return b
     return None
 
@@ -268,7 +264,7 @@ def coerce(value: TypedExpr, target: OscType, location: syntax.Location, what: s
         return TypedExpr(model.MakeList((item.expr,)), target, False)
     if not _assignable(src, target):
         raise OscTypeError(f"{what}: expected {target}, got {src}", location)
-    if value.is_const and (target is FLOAT or isinstance(target, PhysicalType) or isinstance(target, ListType)):
+    if value.is_const and (target is FLOAT or target is UINT or isinstance(target, (PhysicalType, ListType))):
         try:
             converted = convert(value.value, target, what)
         except ConversionError as exc:

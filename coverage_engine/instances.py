@@ -110,8 +110,16 @@ def instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Typed
         key = f"{prefix}.{name}" if prefix else name
         if override is not None:
             override(name, None, FieldInfo(name, vdecl.type, vdecl.initial, False, vdecl.location))
-        initial = field_value(ctx, vdecl.type, vdecl.initial, (), member_scope, key, vdecl.location,
-                              f"variable '{name}'")
+        if name in nested:
+            raise UnsupportedFeatureError(f"not supported: 'keep' on members of variable '{name}'",
+                                          nested[name][0].location)
+        if name in direct:  # a keep on a variable sets its initial value
+            keep = direct[name]
+            initial = coerce(resolve_expression(keep.value, keep.scope, vdecl.type), vdecl.type, keep.location,
+                             f"keep of variable '{name}'")
+        else:
+            initial = field_value(ctx, vdecl.type, vdecl.initial, (), member_scope, key, vdecl.location,
+                                  f"variable '{name}'")
         variable = model.Variable(key, vdecl.type.name, initial.expr, vdecl.location)
         ctx.variables.append(variable)
         values[name] = TypedExpr(model.VariableRef(variable), vdecl.type, False)

@@ -152,6 +152,7 @@ PRIMITIVES: dict[str, PrimitiveType] = {t.name: t for t in (INT, UINT, FLOAT, BO
 
 
 def is_numeric(t: OscType) -> bool:
+    """True for ``int``, ``uint`` and ``float`` (physical types are not plain numbers)."""
     return t is INT or t is UINT or t is FLOAT
 
 

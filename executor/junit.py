@@ -19,6 +19,30 @@ SUITE_NAME = "scenario_execution"
 CLASSNAME = "tests.scenario"
 RESULT_FILE = "test.xml"
 
+# The process umask, read once (it can only be read by setting it), so reports get the usual mode.
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
+
+def write_report(path: str | os.PathLike[str], xml_text: str) -> None:
+    """Write the report atomically: the old file is replaced only once the new one is complete."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".test.xml.", dir=target.parent)
+    try:
+        os.fchmod(fd, 0o666 & ~_UMASK)
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(xml_text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
 
 def parse_error_result(scenario_file: str, message: str, output: str = "") -> ScenarioResult:
     """The failing result recorded when ``scenario_file`` could not be loaded."""
@@ -38,17 +62,8 @@ def write_results(directory: str | os.PathLike, results: Sequence[ScenarioResult
         cases.append(case)
     suite = TestSuite(SUITE_NAME, cases)
     text = to_xml_report_string([suite], prettyprint=True, encoding="utf-8")
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    target = directory / RESULT_FILE
-    handle, temporary = tempfile.mkstemp(prefix=".test.xml.", dir=directory)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(temporary, target)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    target = Path(directory) / RESULT_FILE
+    write_report(target, text)
     return target
 
 

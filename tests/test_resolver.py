@@ -300,3 +300,25 @@ def test_parsing_and_resolving_never_import_the_runtime(project_root):
     done = subprocess.run([sys.executable, "-c", code, str(project_root / "examples/hello_world/hello_world.osc")],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def test_keep_on_a_variable_sets_its_initial_value(tmp_path):
+    sf = load(tmp_path, """
+        struct counter:
+            var v: int = 2
+        scenario sc:
+            c: counter with:
+                keep(it.v == 9)
+            do log(c.v)
+        """)
+    (variable,) = sf.scenarios[0].variables
+    assert variable.key == "c.v" and variable.initial == Const(9)
+
+
+def test_uint_rejects_negative_values(tmp_path):
+    with pytest.raises(OscTypeError, match="negative"):
+        load(tmp_path, """
+        global b: uint = -1
+        scenario sc:
+            do log(b)
+        """)

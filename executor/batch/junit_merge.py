@@ -9,10 +9,7 @@ a timeout is an error of type ``timeout``. Totals are computed by junit-xml from
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Iterable, Mapping
-from pathlib import Path
 
 from junit_xml import TestCase, TestSuite, to_xml_report_string
 
@@ -24,8 +21,6 @@ from store.states import FINAL, JobState
 REPORT_LOG_CHARS = 16 * 1024
 
 #: The process's umask, read once at import (reading it means setting it, which is not thread-safe).
-_UMASK = os.umask(0o022)
-os.umask(_UMASK)
 
 #: Above this many characters the report is written without indentation (pretty-printing costs memory).
 _PRETTY_LIMIT = 8 * 1024 * 1024
@@ -34,12 +29,15 @@ _PRETTY_LIMIT = 8 * 1024 * 1024
 def _case(record: CaseRecord, name: str | None = None) -> TestCase:
     case = TestCase(name or record.name, classname=record.classname, elapsed_sec=record.time,
                     stdout=record.stdout, stderr=record.stderr)
+    # junit-xml counts a failure, error or skip only when it has a message or text, so a child's
+    # bare <failure/> gets its kind as the message rather than turning into a pass.
+    message = record.message or record.type or record.outcome
     if record.outcome == "failure":
-        case.add_failure_info(message=record.message, output=record.text, failure_type=record.type)
+        case.add_failure_info(message=message, output=record.text, failure_type=record.type)
     elif record.outcome == "error":
-        case.add_error_info(message=record.message, output=record.text, error_type=record.type)
+        case.add_error_info(message=message, output=record.text, error_type=record.type)
     elif record.outcome == "skipped":
-        case.add_skipped_info(message=record.message, output=record.text)
+        case.add_skipped_info(message=message, output=record.text)
     return case
 
 
@@ -121,21 +119,3 @@ def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, ob
     return to_xml_report_string(suites, prettyprint=size < _PRETTY_LIMIT)
 
 
-def write_report(path: str | os.PathLike[str], xml_text: str) -> None:
-    """Write the report atomically: the old file is replaced only once the new one is complete."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".test.xml.", dir=target.parent)
-    try:
-        os.fchmod(fd, 0o666 & ~_UMASK)
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(xml_text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise

@@ -17,9 +17,10 @@ from pathlib import Path
 
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs
-from executor.batch.junit_merge import merged_report, write_report
+from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
+from executor.junit import write_report
 from store.jobs import Batch, BatchOptions
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState

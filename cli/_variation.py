@@ -18,8 +18,8 @@ LIST_FILES_UP_TO = 16
 LIST_SKIPPED_UP_TO = 10
 
 
-class StoreUnavailable(Exception):
-    """The store cannot be opened or written."""
+class VariationStoreError(Exception):
+    """The store cannot be opened or written while recording a variation run."""
 
 
 def _echo(message: str = "", err: bool = False) -> None:
@@ -29,13 +29,8 @@ def _echo(message: str = "", err: bool = False) -> None:
 def _read_documents(path: str | None) -> list[dict] | None:
     if path is None:
         return None
-    try:
-        from coverage_engine.parameters import read_parameter_documents
-    except ImportError:  # pragma: no cover - the front end always has it
-        import yaml
+    from coverage_engine.parameters import read_parameter_documents
 
-        with open(path, encoding="utf-8") as handle:
-            return [d or {} for d in yaml.safe_load_all(handle)]
     return read_parameter_documents(path)
 
 
@@ -84,7 +79,7 @@ def _open_store(url: str | None):
         engine = open_engine(store_url(url))
         ensure_schema(engine, TABLES)
     except StoreError as exc:
-        raise StoreUnavailable(str(exc)) from exc
+        raise VariationStoreError(str(exc)) from exc
     return engine
 
 
@@ -178,10 +173,12 @@ def _write(plan, options: dict, engine) -> int:
                          source_text=plan.text, options=store_options,
                          output_dir=str(output_dir.resolve()), records=records(), skipped=plan.total - plan.valid_count())
     except StoreError as exc:
-        raise StoreUnavailable(f"{exc} (the .sce files written so far are in {output_dir}/)") from exc
+        raise VariationStoreError(f"{exc} (the .sce files written so far are in {output_dir}/; "
+                               "files of the earlier generation were kept)") from exc
     finally:
         progress.close()
-        remove_files(list(old.values()))
+    # Only a generation that was written and recorded completely replaces the earlier one.
+    remove_files(list(old.values()))
     skipped = counts["skipped"]
     if skipped > LIST_SKIPPED_UP_TO and not debug:
         _echo(f"... {skipped - LIST_SKIPPED_UP_TO} more skipped variants (-d lists all)", err=True)

@@ -47,10 +47,10 @@ def _guarded(scenario: str, options: dict) -> int:
 
     debug = options["debug"]
     try:
-        from cli._variation import StoreUnavailable, run
+        from cli._variation import VariationStoreError, run
 
         return run(scenario, options)
-    except (OscError, StoreUnavailable) as exc:
+    except (OscError, VariationStoreError) as exc:
         if debug:
             import traceback
 
@@ -66,6 +66,11 @@ def _guarded(scenario: str, options: dict) -> int:
 
             traceback.print_exc()
         click.echo(f"error: {exc}", err=True)
+        return EXIT_FAILED
+    except Exception as exc:  # noqa: BLE001 - last resort: a bug of ours, reported without a traceback
+        if debug:
+            raise
+        click.echo(f"error: internal error: {type(exc).__name__}: {exc} (run with -d for details)", err=True)
         return EXIT_FAILED
 
 

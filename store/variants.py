@@ -238,7 +238,12 @@ def _sqlite_executemany(conn, upsert):
     sql = str(compiled)
 
     def run(batch: list[dict]) -> None:
-        cursor.executemany(sql, [tuple(row[key] for key in order) for row in batch])
+        import sqlite3
+
+        try:
+            cursor.executemany(sql, [tuple(row[key] for key in order) for row in batch])
+        except sqlite3.Error as exc:  # raw driver errors bypass SQLAlchemy's wrapping
+            raise StoreError(f"cannot record variants in the store: {exc}") from exc
 
     return run
 

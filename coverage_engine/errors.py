@@ -22,8 +22,11 @@ class OscError(Exception):
         super().__init__(self.message)
 
     def __str__(self) -> str:
-        if self.location is not None:
-            return f"{self.location}: error: {self.message}"
+        loc = self.location
+        if loc is not None and loc.line < 1:  # a whole file, no position in it
+            return f"{loc.file}: error: {self.message}"
+        if loc is not None:
+            return f"{loc}: error: {self.message}"
         return f"error: {self.message}"
 
     def render(self, text_of: dict[str, str] | None = None) -> str:

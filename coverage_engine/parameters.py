@@ -11,6 +11,7 @@ from pathlib import Path
 
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.model import EnumValue, ScenarioFile
+from coverage_engine.syntax import Location
 
 
 def read_parameter_documents(path: str | Path) -> list[dict]:
@@ -18,19 +19,21 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
     import yaml
 
     path = Path(path)
+    whole_file = Location(str(path), 0, 0)
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise ParameterFileError(f"{path}: scenario parameter file not found") from None
+        raise ParameterFileError("scenario parameter file not found", whole_file) from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ParameterFileError(f"{path}: cannot read scenario parameter file: {exc}") from exc
+        raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
     try:
         documents = list(yaml.safe_load_all(text))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(path)
+        where = Location(str(path), mark.line + 1, mark.column + 1) if mark is not None else whole_file
         problem = getattr(exc, "problem", None) or str(exc)
-        raise ParameterFileError(f"{where}: invalid YAML: {problem}") from exc
+        line = text.splitlines()[mark.line] if mark is not None and mark.line < len(text.splitlines()) else None
+        raise ParameterFileError(f"invalid YAML: {problem}", where, source_line=line) from exc
     if not documents:
         return [{}]
     result: list[dict] = []
@@ -38,8 +41,8 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
         if doc is None:
             doc = {}
         if not isinstance(doc, dict):
-            raise ParameterFileError(f"{path}: document {index + 1} must be a mapping of scenario names to "
-                                     f"parameters, got {type(doc).__name__}")
+            raise ParameterFileError(f"document {index + 1} must be a mapping of scenario names to "
+                                     f"parameters, got {type(doc).__name__}", whole_file)
         result.append(doc)
     return result
 
@@ -68,13 +71,14 @@ def write_parameter_template(scenario_path: str | Path, template_path: str | Pat
 
     target = Path(template_path)
     if target.exists():
-        raise ParameterFileError(f"{target}: file exists; not overwriting it (remove it or choose another name)")
+        raise ParameterFileError("file exists; not overwriting it (remove it or choose another name)",
+                                 Location(str(target), 0, 0))
     model = load_scenario_file(scenario_path)
     text = yaml.safe_dump(template_values(model), sort_keys=False, default_flow_style=False, allow_unicode=True)
     try:
         with open(target, "x", encoding="utf-8") as handle:
             handle.write(text)
     except FileExistsError:
-        raise ParameterFileError(f"{target}: file exists; not overwriting it") from None
+        raise ParameterFileError("file exists; not overwriting it", Location(str(target), 0, 0)) from None
     except OSError as exc:
-        raise ParameterFileError(f"{target}: cannot write template: {exc.strerror}") from exc
+        raise ParameterFileError(f"cannot write template: {exc.strerror}", Location(str(target), 0, 0)) from exc

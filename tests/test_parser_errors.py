@@ -83,15 +83,19 @@ def test_unreadable_files(tmp_path):
         parse_file(bad)
 
 
-@pytest.mark.parametrize("text", ["", "\n\n", "# only a comment", "\ufeffscenario a:\n    do log()\n"])
-def test_degenerate_inputs_parse(text):
-    parse_text(text, "x.osc")
+@pytest.mark.parametrize(("text", "declarations"), [
+    ("", 0), ("\n\n", 0), ("# only a comment", 0), ("\ufeffscenario a:\n    do log()\n", 1)])
+def test_degenerate_inputs_parse(text, declarations):
+    assert len(parse_text(text, "x.osc").declarations) == declarations
 
 
-@pytest.mark.parametrize("text", ["(" * 3000, "global x: int = " + "(" * 2000 + "1" + ")" * 2000 + "\n",
-                                  "global x: int = " + "9" * 5000 + "\n", "\x00", "|", "'''", "\\"])
+@pytest.mark.parametrize("text", ["(" * 3000, "global x: int = " + "9" * 5000 + "\n", "\x00", "|", "\'\'\'"])
 def test_hostile_inputs_give_our_errors(text):
-    try:
+    with pytest.raises(OscError) as info:
         parse_text(text, "x.osc")
-    except OscError as exc:
-        assert exc.location is not None
+    assert info.value.location is not None
+
+
+@pytest.mark.parametrize("text", ["global x: int = " + "(" * 2000 + "1" + ")" * 2000 + "\n", "\\"])
+def test_hostile_but_valid_inputs_parse(text):
+    parse_text(text, "x.osc")

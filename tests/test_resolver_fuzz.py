@@ -6,6 +6,7 @@ resolve or be rejected by the resolver with a position, never with another excep
 
 from __future__ import annotations
 
+import itertools
 import tempfile
 from pathlib import Path
 
@@ -15,17 +16,18 @@ from test_parser_fuzz import mutated
 from coverage_engine.errors import OscError
 from coverage_engine.loader import load_scenario_file
 
-WORK = Path(tempfile.mkdtemp(prefix="resolver_fuzz_"))
+_counter = itertools.count()
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated())
 def test_mutations_load_or_fail_with_a_located_error(text):
-    path = WORK / "fuzz.osc"
-    path.write_text(text, encoding="utf-8")
-    try:
-        load_scenario_file(path)
-    except OscError as exc:
-        assert exc.location is not None, exc.render()
-        assert exc.location.line >= 1 and exc.location.column >= 1
-        exc.render()
+    with tempfile.TemporaryDirectory(prefix="resolver_fuzz_") as work:
+        path = Path(work) / f"fuzz{next(_counter)}.osc"
+        path.write_text(text, encoding="utf-8")
+        try:
+            load_scenario_file(path)
+        except OscError as exc:
+            assert exc.location is not None, exc.render()
+            assert exc.location.line >= 1 and exc.location.column >= 1
+            exc.render()

@@ -7,6 +7,8 @@ block apply to that composite or invocation; several nest in the order written, 
 
 from __future__ import annotations
 
+import math
+
 from coverage_engine import model, syntax
 from coverage_engine.errors import (
     ArgumentError,
@@ -92,8 +94,22 @@ def apply_modifiers(behavior: model.Behavior, modifiers: list[syntax.ModifierInv
             if not value.is_const:
                 raise ResolveError(f"{what}: argument '{name}' must be known before the run", invocation.location)
             arguments.append((name, value.value))
+        _check_modifier_arguments(mtype.name, dict(arguments), invocation)
         behavior = model.Modified(mtype.name, tuple(arguments), behavior, invocation.location)
     return behavior
+
+
+def _check_modifier_arguments(name: str, arguments: dict[str, object], invocation: syntax.ModifierInvocation) -> None:
+    """Reject argument values of the built-in modifiers that cannot mean anything (``repeat(-3)``)."""
+    count = arguments.get("count")
+    if name == "repeat" and isinstance(count, int) and count < -1:
+        raise ArgumentError(f"repeat({count}): the count is a number of runs, or -1 for no end", invocation.location)
+    if name == "retry" and isinstance(count, int) and count < 0:
+        raise ArgumentError(f"retry({count}): the count of permitted failures cannot be negative",
+                            invocation.location)
+    duration = arguments.get("duration")
+    if name == "timeout" and isinstance(duration, float) and not (0 < duration < math.inf):
+        raise ArgumentError(f"timeout({duration} s): the duration must be a positive time", invocation.location)
 
 
 def _find_action(node: syntax.Invocation, scope: Scope) -> tuple[CompoundType, model.Expr | None]:
@@ -188,6 +204,9 @@ def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
         if not (is_time or run_time_number or value.type is ANY):
             raise OscTypeError(f"'elapsed(...)' needs a time with its unit (e.g. 3s), got {value.type}",
                                arg.location)
+        if value.is_const and not (0 <= value.value < math.inf):
+            raise ArgumentError(f"'elapsed(...)' needs a finite, non-negative time, got {value.value} s",
+                                arg.location)
         return model.WaitElapsed(node.label or "wait", value.expr, node.location)
     if isinstance(cond, syntax.EventRef):
         key = ".".join(cond.path)

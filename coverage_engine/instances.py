@@ -69,6 +69,20 @@ def instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Typed
     ``scope_names`` (when given) receives every member as it is computed, so the caller can use the
     members as names afterwards (a scenario's parameters and variables).
     """
+    if ctype.name in ctx.building:
+        chain = " → ".join([*ctx.building[ctx.building.index(ctype.name):], ctype.name])
+        raise ResolveError(f"{ctype.kind} '{ctype.name}' contains itself ({chain}); give the member a "
+                           "default or make it a list", location)
+    ctx.building.append(ctype.name)
+    try:
+        return _instantiate(ctx, ctype, given, keeps, prefix, location, scope_names, override, outer)
+    finally:
+        ctx.building.pop()
+
+
+def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, TypedExpr], keeps: list[KeepValue],
+                 prefix: str, location: syntax.Location, scope_names: dict[str, TypedExpr] | None,
+                 override: OverrideHook | None, outer: Scope | None) -> TypedExpr:
     type_scope = Scope(ctx) if outer is None else outer.child()
     all_keeps = [extract_keep(k, type_scope) for k in ctype.keeps] + list(keeps)
     direct: dict[str, KeepValue] = {}
@@ -196,7 +210,9 @@ def construct(ctx: ResolveContext, ctype: CompoundType, arguments: tuple[syntax.
               location: syntax.Location) -> TypedExpr:
     """``type(args)``: a struct built from constructor arguments (positional in member order, or named)."""
     bound = bind_arguments(list(ctype.fields), arguments, f"'{ctype.name}(...)'", location)
-    given = {name: resolve_expression(arg.value, scope, ctype.fields[name].type) for name, arg in bound.items()}
+    given = {name: coerce(resolve_expression(arg.value, scope, ctype.fields[name].type), ctype.fields[name].type,
+                          arg.location, f"'{ctype.name}(...)', argument '{name}'")
+             for name, arg in bound.items()}
     value = instantiate(ctx, ctype, given, [], ctx.fresh_path(ctype.name), location)
     literal = all(v.is_literal for v in given.values())
     return TypedExpr(value.expr, value.type, literal)

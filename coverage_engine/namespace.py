@@ -178,4 +178,8 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
                 raise ResolveError(f"a {ctype.kind} cannot have a 'do' body", member.location)
             if ctype.kind == "action":
                 raise UnsupportedFeatureError("not supported: 'do' in an action declaration", member.location)
+            if ctype.body is not None and ctype.body.location.file == member.location.file \
+                    and any(m is ctype.body for m in members):
+                raise ResolveError(f"{ctype.kind} '{ctype.name}' already has a 'do' body "
+                                   f"(line {ctype.body.location.line})", member.location)
             ctype.body = member

@@ -35,6 +35,9 @@ def resolve(unit: syntax.CompilationUnit, base_dir: Path | str | None = None,
     except OscError as exc:
         _attach_source_line(exc, texts)
         raise
+    except RecursionError:
+        raise ResolveError("the file is nested too deeply to resolve (an expression or structure of "
+                           "thousands of levels)", syntax.Location(unit.file, 1, 1)) from None
 
 
 def _attach_source_line(exc: OscError, texts: dict[str, str]) -> None:

@@ -72,6 +72,8 @@ class ResolveContext:
         self.variables: list[model.Variable] = []
         self.methods: dict[int, model.ExternalMethod] = {}
         self.counter = 0
+        #: Types whose instance is being built right now, outermost first (to catch 'struct s: a: s').
+        self.building: list[str] = []
 
     def fresh_path(self, hint: str) -> str:
         """A unique key prefix for variables of an instance that has no name of its own."""

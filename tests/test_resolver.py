@@ -322,3 +322,29 @@ def test_uint_rejects_negative_values(tmp_path):
         scenario sc:
             do log(b)
         """)
+
+
+@pytest.mark.parametrize(("text", "message", "line"), [
+    ("scenario a:\n    do log('x')\n    do log('y')\n", "already has a 'do' body", 4),
+    ("struct s:\n    a: s\nscenario sc:\n    p: s\n    do log('x')\n", "contains itself", 3),
+    ("scenario sc:\n    do serial:\n        repeat(-3)\n        log('x')\n", "repeat", 4),
+    ("scenario sc:\n    do serial:\n        timeout(0s)\n        log('x')\n", "positive time", 4),
+    ("scenario sc:\n    do wait elapsed(-1s)\n", "non-negative", 3),
+    ("scenario sc:\n    x: int = " + "+".join(["1"] * 5000) + "\n    do log(x)\n", "nested too deeply", 1),
+])
+def test_meaningless_input_is_a_located_error(tmp_path, text, message, line):
+    with pytest.raises(OscError, match=message) as info:
+        load(tmp_path, text)
+    assert info.value.location.line == line
+
+
+def test_constructor_argument_errors_point_at_the_argument(tmp_path):
+    with pytest.raises(OscTypeError, match="expected length, got time") as info:
+        load(tmp_path, """
+        import osc.standard
+        scenario sc:
+            p: position_3d = position_3d(x: 1s)
+            do log(p)
+        """)
+    assert info.value.location.file.endswith("s.osc")
+    assert (info.value.location.line, info.value.location.column) == (5, 34)

@@ -62,6 +62,26 @@ def _open_store(url):
     return QueueStore.open(url)
 
 
+def _typed_options() -> list[str]:
+    """The options of the current command given on its command line or through the environment."""
+    ctx = click.get_current_context()
+    typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)
+    names = ("input_dir", "timeout", "retries", "post_run", "ignore_rc", "halt_on_failure", "grace", "shard")
+    renamed = {"ignore_rc": "ignore_return_value"}
+    return [renamed.get(name, name) for name in names if ctx.get_parameter_source(name) in typed]
+
+
+def _check_post_run(hooks) -> None:
+    """Each ``--post-run`` must split into a command line (an empty one would run the job folder)."""
+    from executor.hooks import split_hook
+
+    for hook in hooks:
+        try:
+            split_hook(hook)
+        except ValueError as exc:
+            raise click.UsageError(f"--post-run '{hook}': {exc}") from exc
+
+
 @click.command(context_settings={**CONTEXT, "allow_interspersed_args": False})
 @click.option("-i", "--input-dir", type=click.Path(file_okay=False), help="Folder with the .sce/.osc files.")
 @click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
@@ -99,6 +119,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
 
     if not resume and input_dir is None:
         raise click.UsageError("missing -i/--input-dir")
+    _check_post_run(post_run)
     request = runner.BatchRequest(
         input_dir=input_dir, output_dir=runner.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
@@ -107,7 +128,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     store = _open_store(store_url)
     try:
         if resume:
-            batch = runner.resume_batch(store, request.output_dir, request.command)
+            batch = runner.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
             batch = runner.create_batch(store, request, mode="shared" if enqueue_only else "local")
         if enqueue_only:

@@ -182,7 +182,7 @@ class QueueStore(QueueQueries):
                 "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
                 "log_path": result.log_path, "reason": result.reason})
 
-    def halt(self, batch_id: int, reason: str = "not started: the batch was halted") -> int:
+    def halt(self, batch_id: int, reason: str = states.HALT_REASON) -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""
         with self._tx() as conn:
             return len(self._move(conn, Transition.HALT, JobState.CANCELLED, [jobs.c.batch_id == batch_id],

@@ -13,8 +13,12 @@ from sqlalchemy import Connection, func, select
 
 from store.database import StoreError
 from store.jobs import Batch, Job
+from store.queue_sql import JOB_COLUMNS, in_shared_batches
 from store.queue_tables import batches, job_attempts, jobs
 from store.states import JobState
+
+#: Columns of a job with its result (for reports); the scenario text is read only by workers that need it.
+_RESULT_COLUMNS = [c for c in jobs.c if c.name != "scenario_text"]
 
 
 class QueueQueries:
@@ -52,8 +56,7 @@ class QueueQueries:
 
     def jobs(self, batch_id: int, *, results: bool = False) -> list[Job]:
         """The jobs of a batch in file order; with ``results`` also their JUnit XML and log tails."""
-        cols = [c for c in jobs.c if c.name != "scenario_text" and (results or c.name not in
-                                                                    ("junit_xml", "log_tail"))]
+        cols = _RESULT_COLUMNS if results else JOB_COLUMNS
         stmt = select(*cols).where(jobs.c.batch_id == batch_id).order_by(jobs.c.seq)
         with self._tx() as conn:
             return [Job.from_row(r) for r in conn.execute(stmt).mappings()]
@@ -62,7 +65,7 @@ class QueueQueries:
         """The jobs of a batch with their results, read in chunks so a big batch never sits in memory."""
         last = -1
         while True:
-            stmt = (select(*[c for c in jobs.c if c.name != "scenario_text"])
+            stmt = (select(*_RESULT_COLUMNS)
                     .where(jobs.c.batch_id == batch_id, jobs.c.seq > last).order_by(jobs.c.seq).limit(chunk))
             with self._tx() as conn:
                 rows = [Job.from_row(r) for r in conn.execute(stmt).mappings()]
@@ -73,8 +76,8 @@ class QueueQueries:
 
     def running(self, batch_id: int | None = None, *, shared_only: bool = False) -> list[Job]:
         """Jobs currently held by a worker."""
-        cols = [c for c in jobs.c if c.name not in ("junit_xml", "log_tail", "scenario_text")]
-        stmt = select(*cols).where(jobs.c.status == JobState.RUNNING.value).order_by(jobs.c.batch_id, jobs.c.seq)
+        stmt = (select(*JOB_COLUMNS).where(jobs.c.status == JobState.RUNNING.value)
+                .order_by(jobs.c.batch_id, jobs.c.seq))
         stmt = self._scope(stmt, batch_id, shared_only)
         with self._tx() as conn:
             return [Job.from_row(r) for r in conn.execute(stmt).mappings()]
@@ -104,5 +107,5 @@ class QueueQueries:
         if batch_id is not None:
             return stmt.where(jobs.c.batch_id == batch_id)
         if shared_only:
-            return stmt.where(jobs.c.batch_id.in_(select(batches.c.id).where(batches.c.mode == "shared")))
+            return stmt.where(in_shared_batches())
         return stmt

@@ -18,6 +18,13 @@ from store.states import JobState, Transition
 #: Columns handed out with a job; the large result columns are read only for reports.
 JOB_COLUMNS = [c for c in jobs.c if c.name not in ("junit_xml", "log_tail", "scenario_text")]
 
+
+
+def in_shared_batches() -> ColumnElement[bool]:
+    """``jobs.batch_id`` is one of a shared batch (what ``worker`` runs when not limited to one batch)."""
+    return jobs.c.batch_id.in_(select(batches.c.id).where(batches.c.mode == "shared"))
+
+
 #: A result counts only from the lease holder of this very attempt (``attempts`` is the fencing token).
 HOLDER = and_(jobs.c.id == bindparam("g_job"), jobs.c.worker_id == bindparam("g_holder"),
               jobs.c.attempts == bindparam("g_attempt"))
@@ -56,7 +63,7 @@ def claim_statement(scope: str) -> Update:
     if scope == "batch":
         pick = pick.where(jobs.c.batch_id == bindparam("g_batch"))
     elif scope == "shared":
-        pick = pick.where(jobs.c.batch_id.in_(select(batches.c.id).where(batches.c.mode == "shared")))
+        pick = pick.where(in_shared_batches())
     picked = (pick.order_by(jobs.c.batch_id, jobs.c.seq).limit(bindparam("b_limit"))
               .with_for_update(skip_locked=True, of=jobs).cte("picked"))
     return (guarded_update(Transition.CLAIM, JobState.RUNNING, jobs.c.id == picked.c.id)

@@ -57,6 +57,9 @@ TRANSITIONS: dict[Transition, tuple[frozenset[JobState], frozenset[JobState]]] =
 }
 
 #: Verdicts worth another attempt when ``--retries`` allows: the scenario did not get to report a result.
+#: The reason recorded on jobs a halt cancelled before they started (the merged report shows them as skipped).
+HALT_REASON = "not started: --halt-on-failure after a failed job"
+
 RETRYABLE = frozenset({JobState.ERROR, JobState.TIMEOUT})
 
 

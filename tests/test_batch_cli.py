@@ -179,7 +179,16 @@ def test_halt_on_failure_starts_nothing_after_a_failure(tmp_path):
     result = _batch(tmp_path, {"a": "", "b": "xml=fail", "c": "", "d": ""}, "--halt-on-failure")
     assert result.returncode == 1
     assert ledger(tmp_path) == {"a": 1, "b": 1}
-    assert list(_suites(tmp_path / "results" / "test.xml")) == ["a", "b"]
+    report = tmp_path / "results" / "test.xml"
+    suites = _suites(report)
+    assert list(suites) == ["a", "b", "c", "d"]               # the test count in CI does not shrink
+    for name in ("c", "d"):
+        skipped = suites[name].findall("testcase/skipped")
+        assert [s.get("message") for s in skipped] == ["not run: the batch halted after a failure"]
+        assert _props(suites[name])["status"] == "cancelled"
+    root = ET.parse(report).getroot()
+    assert (root.get("tests"), root.get("failures")) == ("4", "1")
+    assert sum(int(s.get("skipped", "0")) for s in suites.values()) == 2
 
 
 def test_log_is_written_while_the_child_runs(tmp_path):

@@ -153,3 +153,28 @@ def test_resume_ends_the_process_group_a_killed_runner_left_behind(tmp_path):
         time.sleep(0.05)
     assert ledger(tmp_path) == {"orphan": 1}
     assert _suite_names(tmp_path / "results" / "test.xml") == ["orphan"]
+
+
+def test_resume_refuses_options_that_differ_from_the_batch(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a": ""})
+    write_scenarios(tmp_path / "other", {"a": ""})
+    env = cli_env(tmp_path)
+    first = run_cli(["-i", "in", "-o", "results", "--timeout", "30", "--retries", "1", "--post-run", "true",
+                     "--", *child_command(child)], tmp_path, env)
+    assert first.returncode == 0, first.stdout + first.stderr
+    differing = run_cli(["-i", "other", "-o", "results", "--resume", "--timeout", "60", "--retries", "1",
+                         "--post-run", "echo", "-r"], tmp_path, env)
+    assert differing.returncode == 1, differing.stdout + differing.stderr
+    message = differing.stderr.strip()
+    assert len(message.splitlines()) == 1 and "Traceback" not in message
+    for part in ("--timeout 60 (the batch has 30)", "--post-run echo (the batch has true)",
+                 "--ignore-process-return-value True (the batch has False)",
+                 f"-i other (the batch has {tmp_path / 'in'})"):
+        assert part in message, message
+    assert "--retries" not in message                           # the same value is no difference
+    same = run_cli(["-i", "in", "-o", "results", "--resume", "--timeout", "30", "--retries", "1",
+                    "--post-run", "true"], tmp_path, env)
+    assert same.returncode == 0, same.stdout + same.stderr
+    assert run_cli(["-o", "results", "--resume", "-j", "2"], tmp_path, env).returncode == 0
+    assert ledger(tmp_path) == {"a": 1}

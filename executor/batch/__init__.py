@@ -1,8 +1,8 @@
 """The batch runner: scenario files become jobs in the store's queue, workers run each as a subprocess.
 
-Modules: ``inputs`` (files, shards, the launch command), ``process`` (one child in its own process
-group, its log, its timeout), ``job_run`` (one attempt in a thread), ``verdict`` (judging an attempt),
-``junit_read``/``junit_merge`` (child reports in, the merged report out), ``hooks`` (``--post-run``),
-``worker`` (the claim/run/finish loop, no SQL), ``progress`` and ``status`` (output for people),
-``runner`` (what the command line calls).
+Modules: ``inputs`` (files, shards, the launch command), ``job_run`` (one attempt in a thread),
+``verdict`` (judging an attempt), ``junit_read``/``junit_merge`` (child reports in, the merged report
+out), ``worker`` (the claim/run/finish loop, no SQL), ``progress`` and ``status`` (output for people),
+``runner`` (what the command line calls). Shared with ``scenario_execution``: :mod:`executor.process`
+(one child in its own process group, its log, its timeout) and :mod:`executor.hooks` (``--post-run``).
 """

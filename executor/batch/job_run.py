@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from executor.batch.hooks import run_post_hooks
 from executor.batch.inputs import substitute
-from executor.batch.process import ChildProcess
 from executor.batch.verdict import LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
+from executor.hooks import run_post_hooks
+from executor.process import ChildProcess
 from store.jobs import Batch, Job, JobResult
 from store.states import JobState
 
@@ -37,6 +37,10 @@ class Done:
     run: JobRun
     result: JobResult
     problems: list[str] = field(default_factory=list)
+
+
+#: Where the ``--post-run`` hooks of a job write, in the job's folder.
+HOOK_LOG = "post_run.log"
 
 
 def job_marker(job_id: int, attempt: int) -> str:
@@ -66,7 +70,7 @@ class JobRun:
         self.echo = echo
         self.die_with_parent = die_with_parent
         self.lost = False                     # set when the lease was taken over: the result is dropped
-        self._child: ChildProcess | None = None
+        self._child: ChildProcess | None = None    # the job's child, then each post-run hook's in turn
         self._lock = threading.Lock()
         self._cancel_grace: float | None = None
         self._thread = threading.Thread(target=self._main, name=f"job-{job.name}", daemon=True)
@@ -78,12 +82,25 @@ class JobRun:
         self._thread.join(timeout)
 
     def cancel(self, grace: float | None = None) -> None:
-        """Interrupt the child (SIGINT, SIGKILL after ``grace``); an attempt not started yet never starts."""
+        """Interrupt the child or the running post-run hook (SIGINT to its process group, SIGKILL after
+        ``grace``); an attempt or hook not started yet never starts. Safe to call again with a shorter grace."""
         with self._lock:
             self._cancel_grace = self.batch.options.grace if grace is None else grace
-            child = self._child
+            child, grace = self._child, self._cancel_grace
         if child is not None:
-            child.cancel(self._cancel_grace)
+            child.cancel(grace)
+
+    def _cancel_requested(self) -> bool:
+        with self._lock:
+            return self._cancel_grace is not None
+
+    def _track(self, child: ChildProcess | None) -> None:
+        """Make ``child`` (a post-run hook's process) the one :meth:`cancel` ends; cancel it if that came first."""
+        with self._lock:
+            self._child = child
+            grace = self._cancel_grace
+        if child is not None and grace is not None:
+            child.cancel(grace)
 
     def _main(self) -> None:
         started = time.time()
@@ -116,6 +133,8 @@ class JobRun:
         self.events.put(Started(self, pid))
         outcome = child.wait()
         if options.post_run and not outcome.cancelled:
-            problems.extend(run_post_hooks(options.post_run, self.output_dir, cwd=self.cwd))
+            problems.extend(run_post_hooks(options.post_run, self.output_dir, log_path=self.output_dir / HOOK_LOG,
+                                           cwd=self.cwd, grace=options.grace, cancelled=self._cancel_requested,
+                                           track=self._track))
         return judge(outcome, self.output_dir, mark, ignore_return_value=options.ignore_return_value,
                      timeout=options.timeout)

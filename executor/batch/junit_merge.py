@@ -4,7 +4,8 @@ Each suite is named after the job's file and holds the child's testcases. A chil
 testcase has it named after the job (so the variants of one scenario stay apart in CI), the original
 name kept in the suite's ``testcase`` property; several testcases keep their names. A job without a
 readable report becomes one testcase with an ``error`` carrying the exit code and the end of its log;
-a timeout is an error of type ``timeout``. Totals are computed by junit-xml from the testcases.
+a timeout is an error of type ``timeout``. A job that ``--halt-on-failure`` kept from starting is one
+skipped testcase, so CI's test count never shrinks. Totals are computed by junit-xml from the testcases.
 """
 
 from __future__ import annotations
@@ -15,12 +16,10 @@ from junit_xml import TestCase, TestSuite, to_xml_report_string
 
 from executor.batch.junit_read import CaseRecord, JunitUnreadable, has_problem, read_cases
 from store.jobs import Job
-from store.states import FINAL, JobState
+from store.states import FINAL, HALT_REASON, JobState
 
 #: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
 REPORT_LOG_CHARS = 16 * 1024
-
-#: The process's umask, read once at import (reading it means setting it, which is not thread-safe).
 
 #: Above this many characters the report is written without indentation (pretty-printing costs memory).
 _PRETTY_LIMIT = 8 * 1024 * 1024
@@ -39,6 +38,15 @@ def _case(record: CaseRecord, name: str | None = None) -> TestCase:
     elif record.outcome == "skipped":
         case.add_skipped_info(message=message, output=record.text)
     return case
+
+
+#: The message of the skipped testcase of a job that a halt kept from running.
+HALTED_MESSAGE = "not run: the batch halted after a failure"
+
+
+def halted(job: Job) -> bool:
+    """Whether ``--halt-on-failure`` cancelled the job before it started."""
+    return job.status is JobState.CANCELLED and job.reason == HALT_REASON
 
 
 def _tail(text: str | None) -> str | None:
@@ -76,7 +84,11 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestS
         message += f" ({exit_text})"
     kind = "timeout" if job.status is JobState.TIMEOUT else "error"
     test_cases: list[TestCase] = []
-    if not cases:
+    if halted(job):
+        case = TestCase(job.name, classname=job.name, elapsed_sec=None)
+        case.add_skipped_info(message=HALTED_MESSAGE)
+        test_cases.append(case)
+    elif not cases:
         case = TestCase(job.name, classname=job.name, elapsed_sec=job.duration)
         if job.status is JobState.PASSED:
             pass
@@ -107,12 +119,15 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestS
 
 
 def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, object]] | None = None) -> str:
-    """The merged JUnit XML of the jobs that have a verdict (queued, running and cancelled ones are left out)."""
+    """The merged JUnit XML of the jobs that have a verdict, and of those a halt kept from running (as skipped).
+
+    Queued, running and interrupted (Ctrl-C) jobs are left out: ``--resume`` runs them.
+    """
     assignments = assignments or {}
     suites = []
     size = 0
     for job in jobs:
-        if job.status not in FINAL:
+        if job.status not in FINAL and not halted(job):
             continue
         suites.append(job_suite(job, assignments.get(job.scenario_path)))
         size += len(job.junit_xml or "") + min(len(job.log_tail or ""), REPORT_LOG_CHARS)

@@ -7,10 +7,11 @@ default), a :class:`Worker` scoped to it, and the merged report built from the s
 from __future__ import annotations
 
 import os
+import shlex
 import signal
 import socket
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -65,13 +66,53 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
                               command=request.command, options=options, specs=specs)
 
 
-def resume_batch(store: QueueStore, output_dir: str, command: Sequence[str]) -> Batch:
-    """The latest batch for ``output_dir``, its cancelled jobs queued again; the command must match."""
+#: The options stored with a batch, as they are spelled on the command line.
+OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
+                "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
+                "grace": "--grace", "shard": "--shard"}
+
+
+def _shown(value: object) -> str:
+    if value is None:
+        return "none"
+    if isinstance(value, tuple):
+        return " ".join(shlex.quote(v) for v in value) if value else "none"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def option_differences(batch: Batch, request: BatchRequest, given: Iterable[str]) -> list[str]:
+    """``--flag X (the batch has Y)`` for each option in ``given`` (as typed) that differs from the stored batch."""
+    wanted = set(given)
+    options = request.options
+    if request.shard is not None:
+        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
+    out = []
+    if "input_dir" in wanted and request.input_dir is not None and \
+            str(Path(request.input_dir).resolve()) != batch.input_dir:
+        out.append(f"-i {request.input_dir} (the batch has {batch.input_dir})")
+    for name, flag in OPTION_FLAGS.items():
+        mine, stored = getattr(options, name), getattr(batch.options, name)
+        if name in wanted and mine != stored:
+            out.append(f"{flag} {_shown(mine)} (the batch has {_shown(stored)})")
+    return out
+
+
+def resume_batch(store: QueueStore, output_dir: str, command: Sequence[str],
+                 request: BatchRequest | None = None, given: Iterable[str] = ()) -> Batch:
+    """The latest batch for ``output_dir``, its cancelled jobs queued again.
+
+    The command and every option named in ``given`` (those typed on the command line) must match the
+    stored batch: a resumed batch runs all its jobs alike, so a difference is refused, not ignored.
+    """
     batch = store.latest_batch(output_dir=output_dir)
     if batch is None:
         raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url} to resume")
     if command and tuple(command) != batch.command:
         raise BatchError(f"--resume: the batch was started with a different command: {' '.join(batch.command)}")
+    differences = option_differences(batch, request, given) if request is not None else []
+    if differences:
+        raise BatchError("--resume: the batch was started with other options; it keeps them, so leave these "
+                         "out or start a new batch without --resume: " + "; ".join(differences))
     store.resume(batch.id)
     return batch
 
@@ -121,9 +162,8 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
 
 def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str]) -> dict[JobState, int]:
     """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts."""
-    jobs = list(store.iter_results(batch.id))
-    assignments = variant_assignments(store.engine, [j.scenario_path for j in jobs])
-    write_report(path, merged_report(jobs, assignments))
+    assignments = variant_assignments(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
+    write_report(path, merged_report(store.iter_results(batch.id), assignments))
     return store.counts(batch.id)
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from executor.batch.junit_read import CaseRecord, JunitUnreadable, clean_text, has_problem, read_cases
-from executor.batch.process import ProcessOutcome
+from executor.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState
 

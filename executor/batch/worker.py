@@ -20,8 +20,10 @@ from pathlib import Path
 from typing import BinaryIO
 
 from executor.batch.job_run import Done, JobRun, Started, job_marker
-from executor.batch.process import end_orphan_group
 from executor.batch.progress import Reporter
+from executor.batch.verdict import launch_failure
+from executor.process import end_orphan_group
+from store.database import StoreError
 from store.jobs import Batch, Job, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
 from store.states import RETRYABLE, JobState
@@ -110,7 +112,21 @@ class Worker:
             self._force.set()
 
     def run(self) -> WorkerSummary:
-        """The loop; returns when no work is left, or after a stop once every running job has ended."""
+        """The loop; returns when no work is left, or after a stop once every running job has ended.
+
+        Should the loop itself fail, the running children are killed before the error propagates (their
+        jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone).
+        """
+        try:
+            return self._loop()
+        except BaseException:
+            for run in list(self._runs.values()):
+                run.cancel(grace=0)
+            for run in list(self._runs.values()):
+                run.join(timeout=5.0)
+            raise
+
+    def _loop(self) -> WorkerSummary:
         beat_every = max(0.05, self.settings.lease / 4)
         next_beat = next_sweep = 0.0
         stopped_at: float | None = None
@@ -181,8 +197,19 @@ class Worker:
         self._claim_more = len(jobs) == free
         if not self._claim_more:
             self._next_claim = time.monotonic() + self.settings.poll
-        for job in jobs:
-            self._start(job)
+        for index, job in enumerate(jobs):
+            try:
+                self._start(job)
+            except BaseException:
+                self._give_back([j.id for j in jobs[index:]])
+                raise
+
+    def _give_back(self, job_ids: list[int]) -> None:
+        """Release claimed jobs that will not be started here (if the store is unreachable, the next heartbeat does)."""
+        try:
+            self.store.release(self.identity, job_ids)
+        except StoreUnavailable:
+            self._unsure_claims = True
 
     def _batch(self, batch_id: int) -> Batch:
         if batch_id not in self._batches:
@@ -190,17 +217,38 @@ class Worker:
         return self._batches[batch_id]
 
     def _start(self, job: Job) -> None:
+        """Start a claimed job's thread; a job that cannot be prepared ends with a launch failure.
+
+        Raises only when the store cannot say how to run it (its batch, its scenario text), so the caller
+        gives the job back instead.
+        """
         batch = self._batch(job.batch_id)
         root = Path(self.settings.output_root or batch.output_dir)
         output_dir = root / job.name
-        scenario = self._scenario_file(job, batch, output_dir)
+        began = time.time()
+        problem: str | None = None
+        try:
+            scenario = self._scenario_file(job, batch, output_dir)
+        except StoreError:
+            raise
+        except OSError as exc:
+            scenario, problem = job.scenario_path, f"cannot prepare the job: {exc.strerror or exc}" + (
+                f": {exc.filename}" if exc.filename else "")
+        except Exception as exc:  # noqa: BLE001 - one job that cannot be prepared must not end the loop
+            scenario, problem = job.scenario_path, f"cannot prepare the job: {exc!r}"
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
                      echo=self.settings.echo if self.settings.slots == 1 else None,
                      die_with_parent=self.settings.die_with_parent)
         self._runs[job.id] = run
         self._started += 1
         self.reporter.job_started(job)
-        run.start()
+        if problem is None:
+            try:
+                run.start()
+                return
+            except RuntimeError as exc:           # no thread could be started
+                problem = f"cannot start the job: {exc}"
+        self._events.put(Done(run, launch_failure(output_dir, began, time.time(), problem)))
 
     def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
         """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""
@@ -326,7 +374,7 @@ class Worker:
 
     def _halt(self, batch_id: int) -> None:
         if batch_id not in self._halted:
-            count = self.store.halt(batch_id, "not started: --halt-on-failure after a failed job")
+            count = self.store.halt(batch_id)
             self._halted.add(batch_id)
             self._claim_more = False
             if count:

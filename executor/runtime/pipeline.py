@@ -11,7 +11,9 @@ one failing testcase. Only the run path imports py_trees (and rich only for ``-t
 
 from __future__ import annotations
 
+import math
 import os
+import sys
 
 from coverage_engine.errors import OscError
 from executor.runtime.logger import Logger
@@ -47,13 +49,14 @@ class ExecutionRequest:
 
 
 def _check_options(request: ExecutionRequest) -> None:
-    if not request.step_duration or request.step_duration <= 0:
-        raise UsageProblem(f"--step-duration must be a positive number of seconds, got {request.step_duration}")
+    step = request.step_duration
+    if isinstance(step, bool) or not isinstance(step, (int, float)) or not math.isfinite(step) or step <= 0:
+        raise UsageProblem(f"--step-duration must be a positive, finite number of seconds, got {step!r}")
     if not request.post_run:
         return
     import shutil
 
-    from executor.runtime.post_run import split_hook
+    from executor.hooks import split_hook
 
     for hook in request.post_run:
         try:
@@ -64,20 +67,37 @@ def _check_options(request: ExecutionRequest) -> None:
             raise UsageProblem(f"--post-run '{hook}': '{program}' is not an executable file or command")
 
 
-def _load(request: ExecutionRequest):
-    """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``."""
+def _load(request: ExecutionRequest, logger: Logger):
+    """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``.
+
+    A parameter-file error without a location is pointed at the file (at the key, when the message
+    names one); an empty document is said once, as it runs every scenario with its defaults.
+    """
+    from coverage_engine.errors import ParameterFileError
     from coverage_engine.loader import load_scenario_file
     from executor.runtime.plan import split_output_dirs
 
     documents: list = [None]
-    if request.parameter_file:
+    path = request.parameter_file
+    if path:
         from coverage_engine.parameters import read_parameter_documents
 
-        documents = read_parameter_documents(request.parameter_file) or [None]
-    split = [split_output_dirs(document) for document in documents]
+        documents = read_parameter_documents(path) or [None]
+        for index, document in enumerate(documents):
+            if not document:
+                which = f"document {index + 1} is empty" if len(documents) > 1 else "it holds no parameters"
+                logger.warning(f"{path}: {which}: scenarios run with their defaults")
     loaded = []
-    for overrides, dirs in split:
-        loaded.append((load_scenario_file(request.scenario, overrides), dirs))
+    for index, document in enumerate(documents):
+        try:
+            overrides, dirs = split_output_dirs(document)
+            loaded.append((load_scenario_file(request.scenario, overrides), dirs))
+        except ParameterFileError as exc:
+            if path and exc.location is None:
+                from executor.runtime.parameter_locations import locate
+
+                exc.location, exc.source_line = locate(path, index, exc.message)
+            raise
     return loaded
 
 
@@ -106,7 +126,7 @@ def execute(request: ExecutionRequest) -> int:
             os.remove(stale)
 
     try:
-        loaded = _load(request)
+        loaded = _load(request, logger)
         from executor.actions.registry import check_actions_available
 
         check_actions_available(s for scenario_file, _ in loaded for s in scenario_file.scenarios)
@@ -128,19 +148,9 @@ def execute(request: ExecutionRequest) -> int:
 
 
 def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
+    from coverage_engine.evaluate import add_import_paths
     from executor.runtime.plan import plan_runs
     from executor.runtime.session import SessionOptions, run_session
-
-    simulation = None
-    if request.simulation:
-        from executor.simulation import SimulationError, load_simulation
-
-        try:
-            simulation = load_simulation(request.simulation)
-        except SimulationError as exc:
-            raise UsageProblem(str(exc)) from exc
-
-    from coverage_engine.evaluate import add_import_paths
 
     scenario_dir = os.path.dirname(os.path.abspath(request.scenario))
     add_import_paths([os.getcwd(), scenario_dir])
@@ -148,6 +158,23 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     if not runs:
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED
+
+    simulation = None
+    if request.simulation:
+        from executor.simulation import SimulationError, load_simulation, simulation_dt
+
+        try:
+            simulation = load_simulation(request.simulation)
+            simulation_dt(simulation)
+        except SimulationError as exc:
+            if output_root:  # CI sees that nothing ran, and why
+                from executor.junit import write_grouped
+                from executor.runtime.results import ScenarioResult
+
+                write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
+                              output_root, request.per_scenario)
+            raise UsageProblem(str(exc)) from exc
+
     if request.dot:
         from executor.runtime.dot import write_dot_files
 
@@ -158,28 +185,36 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
         from executor.runtime.live import LiveTree
 
         live = LiveTree()
+    report = None
+    if output_root:
+        from executor.junit import ReportWriter
+
+        report = ReportWriter(output_root, request.per_scenario)
     options = SessionOptions(tick_period=request.step_duration, simulation=simulation, input_dir=scenario_dir,
                              output_root=output_root, debug=request.debug,
-                             observer_factory=live.observers if live else None)
+                             observer_factory=live.observers if live else None,
+                             on_result=report.update if report else None)
     try:
         outcome = run_session(runs, options, logger)
     finally:
         if live is not None:
             live.close()
 
-    if output_root:
-        from executor.junit import write_grouped
-
-        for path in write_grouped(outcome.results, output_root, request.per_scenario):
+    if report is not None:  # what the last update did not see (the aborted and skipped scenarios)
+        for path in report.update(outcome.results):
             logger.debug(f"wrote {path}")
     if outcome.aborted:
         if request.post_run:
             logger.warning("aborted: --post-run commands skipped")
         return 128 + outcome.aborted
     if request.post_run:
-        from executor.runtime.post_run import run_post_hooks
+        from executor.hooks import run_post_hooks
 
-        run_post_hooks(request.post_run, output_root or os.getcwd(), logger)
+        def announce(command: str) -> None:
+            logger.info(f"Running post-run: {command}")
+            sys.stdout.flush()
+
+        run_post_hooks(request.post_run, output_root or os.getcwd(), announce=announce, report=logger.error)
     failed = [r.name for r in outcome.results if not r.passed]
     if failed:
         logger.error(f"{len(failed)} of {len(outcome.results)} scenario(s) failed: {', '.join(failed)}")

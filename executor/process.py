@@ -1,9 +1,10 @@
-"""One child process of a batch job: its own process group, its log file, its timeout and cancellation.
+"""One child process in its own process group: its log file, its timeout and cancellation.
 
-The child's stdout and stderr go straight into ``log.txt`` (the kernel writes them, so nothing is lost
-when the child or this process dies); with ``echo`` they pass through a pipe and are copied to the log
-and to the terminal as they arrive. A timeout or a cancel signals the whole process group, then kills
-it after a grace period; whatever is left of the group when the child exits is killed too.
+Used for batch jobs and for ``--post-run`` hooks. The child's stdout and stderr go straight into its
+log (the kernel writes them, so nothing is lost when the child or this process dies); with ``echo``
+they pass through a pipe and are copied to the log and to the terminal as they arrive; without a log
+the child shares this process's terminal. A timeout or a cancel signals the whole process group, then
+kills it after a grace period; whatever is left of the group when the child exits is killed too.
 """
 
 from __future__ import annotations
@@ -122,11 +123,12 @@ def end_orphan_group(pgid: int, marker: str) -> bool:
 class ChildProcess:
     """Start a command in a new session and wait for it; ``cancel`` may be called from another thread."""
 
-    def __init__(self, argv: Sequence[str], log_path: str, *, cwd: str | None = None,
+    def __init__(self, argv: Sequence[str], log_path: str | None, *, cwd: str | None = None,
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
-                 die_with_parent: bool = False, marker: str | None = None) -> None:
+                 die_with_parent: bool = False, marker: str | None = None, append: bool = False) -> None:
         self.argv = list(argv)
-        self.log_path = log_path
+        self.log_path = log_path               # None: stdin, stdout and stderr are this process's
+        self.append = append
         self.cwd = cwd
         self.timeout = timeout
         self.grace = grace
@@ -144,22 +146,41 @@ class ChildProcess:
     def pid(self) -> int | None:
         return None if self.proc is None else self.proc.pid
 
-    def start(self) -> int:
-        """Spawn the child (no shell, own process group); raises OSError when it cannot be started."""
+    def start(self) -> int | None:
+        """Spawn the child (no shell, own process group); raises OSError when it cannot be started.
+
+        Returns its process id, or None without starting it when :meth:`cancel` came first.
+        """
         self._started_at = time.time()
-        with open(self.log_path, "wb") as log:
-            self.proc = subprocess.Popen(
-                self.argv, cwd=self.cwd, stdin=subprocess.DEVNULL,
-                stdout=subprocess.PIPE if self.echo is not None else log, stderr=subprocess.STDOUT,
-                env=self.env, start_new_session=True, close_fds=True,
-                preexec_fn=die_with(os.getpid()) if self.die_with_parent else None)
-        if self.timeout is not None:
-            self._arm(self.timeout, self._on_timeout)
-        return self.proc.pid
+        with self._lock:
+            if self._cancelled:
+                return None
+            if self.log_path is None:
+                self.proc = self._spawn(None, None)
+            else:
+                with open(self.log_path, "ab" if self.append else "wb") as log:
+                    self.proc = self._spawn(subprocess.DEVNULL,
+                                            subprocess.PIPE if self.echo is not None else log)
+            if self.timeout is not None:
+                self._arm_locked(self.timeout, self._on_timeout)
+            return self.proc.pid
+
+    def _spawn(self, stdin, stdout) -> subprocess.Popen[bytes]:
+        return subprocess.Popen(
+            self.argv, cwd=self.cwd, stdin=stdin, stdout=stdout,
+            stderr=None if stdout is None else subprocess.STDOUT,
+            env=self.env, start_new_session=True, close_fds=True,
+            preexec_fn=die_with(os.getpid()) if self.die_with_parent else None)
 
     def wait(self) -> ProcessOutcome:
-        """Block until the child exits (copying its output when echoing); end what is left of its group."""
-        assert self.proc is not None, "start() first"
+        """Block until the child exits (copying its output when echoing); end what is left of its group.
+
+        A child that was cancelled before it started ends at once as cancelled, with no return code.
+        """
+        if self.proc is None:
+            assert self._cancelled, "start() first"
+            now = time.time()
+            return ProcessOutcome(returncode=None, started_at=now, finished_at=now, cancelled=True)
         copier = None
         if self.echo is not None:
             copier = threading.Thread(target=self._copy, name=f"log-{self.proc.pid}", daemon=True)
@@ -189,10 +210,6 @@ class ChildProcess:
             kill_group(self.proc.pid, signal.SIGINT)
             self._arm_locked(grace, self._on_grace_over)
 
-    def _arm(self, delay: float, action) -> None:
-        with self._lock:
-            self._arm_locked(delay, action)
-
     def _arm_locked(self, delay: float, action) -> None:
         timer = threading.Timer(delay, action)
         timer.daemon = True
@@ -215,6 +232,7 @@ class ChildProcess:
     def _copy(self) -> None:
         assert self.proc is not None and self.proc.stdout is not None and self.echo is not None
         stream = self.proc.stdout
+        assert self.log_path is not None
         with open(self.log_path, "ab") as log:
             while True:
                 data = stream.read1(_CHUNK) if hasattr(stream, "read1") else stream.read(_CHUNK)

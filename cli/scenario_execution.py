@@ -20,6 +20,26 @@ from coverage_engine.errors import OscError
 EXIT_FAILED = 1
 
 
+class Seconds(click.ParamType):
+    """A positive, finite number of seconds up to a day (``inf``, ``nan``, 0 and negatives are usage errors)."""
+
+    name = "seconds"
+    maximum = 86400.0
+
+    def convert(self, value, param, ctx):
+        import math
+
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number of seconds", param, ctx)
+        if not math.isfinite(number) or number <= 0:
+            self.fail(f"{value!r} is not a positive, finite number of seconds", param, ctx)
+        if number > self.maximum:
+            self.fail(f"{value!r} is more than a day ({self.maximum:g} seconds)", param, ctx)
+        return number
+
+
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("-d", "--debug", is_flag=True, help="Debug output (and tracebacks of internal errors).")
 @click.option("-l", "--log-model", is_flag=True, help="Print the resolved model of the scenario file.")
@@ -28,7 +48,7 @@ EXIT_FAILED = 1
               help="Directory for results (test.xml); created with its parents.")
 @click.option("-n", "--dry-run", is_flag=True, help="Parse and resolve only; execute nothing.")
 @click.option("--dot", is_flag=True, help="Write <scenario>.dot (and .png/.svg when Graphviz is installed).")
-@click.option("-s", "--step-duration", type=float, default=0.1, show_default=True,
+@click.option("-s", "--step-duration", type=Seconds(), default=0.1, show_default=True,
               help="Seconds between two ticks of the behaviour tree (wall-clock mode).")
 @click.option("--scenario-parameter-file", type=click.Path(dir_okay=False),
               help="YAML file overriding scenario parameters; several documents mean several runs.")

@@ -15,8 +15,32 @@ from coverage_engine.syntax import Location
 
 
 def read_parameter_documents(path: str | Path) -> list[dict]:
-    """The documents of a parameter file, in order; an empty file is one empty document."""
+    """The documents of a parameter file, in order; an empty file is one empty document.
+
+    A key written twice in one mapping is an error at its second place (PyYAML alone keeps the last).
+    """
     import yaml
+
+    class UniqueKeyLoader(yaml.SafeLoader):
+        def construct_mapping(self, node, deep=False):
+            if isinstance(node, yaml.MappingNode):
+                seen: dict = {}
+                for key_node, _ in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue
+                    key = self.construct_object(key_node, deep=True)
+                    try:
+                        first = seen.setdefault(key, key_node)
+                    except TypeError:  # an unhashable key: PyYAML reports it
+                        continue
+                    if first is not key_node:
+                        mark = key_node.start_mark
+                        lines = text.splitlines()
+                        raise ParameterFileError(
+                            f"duplicate key '{key}' (first at line {first.start_mark.line + 1})",
+                            Location(str(path), mark.line + 1, mark.column + 1),
+                            source_line=lines[mark.line] if mark.line < len(lines) else None)
+            return super().construct_mapping(node, deep=deep)
 
     path = Path(path)
     whole_file = Location(str(path), 0, 0)
@@ -27,7 +51,7 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
     try:
-        documents = list(yaml.safe_load_all(text))
+        documents = list(yaml.load_all(text, Loader=UniqueKeyLoader))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = Location(str(path), mark.line + 1, mark.column + 1) if mark is not None else whole_file

@@ -1,15 +1,19 @@
 """Write ``test.xml`` (JUnit, via junit-xml): one testcase per executed scenario.
 
 A failed scenario carries its one-line reason as the failure message and the last tree snapshot as
-the failure text. A file that cannot be parsed or resolved is reported as a single failing testcase
-(``parse_error_result``), so CI sees it too. The file is written to a temporary name and moved into
-place, so a reader never sees half a report.
+the failure text; a scenario an abort kept from starting is a skipped testcase. A file that cannot be
+parsed or resolved is reported as a single failing testcase (``parse_error_result``), so CI sees it
+too. ``timestamp`` is the scenario's local start time in ISO 8601 (``2026-11-22T07:00:20``), the form
+the JUnit schema asks for. The file is written to a temporary name and moved into place, so a reader
+never sees half a report; :class:`ReportWriter` rewrites it after each scenario, so a ``kill -9``
+loses only the scenario that was running.
 """
 
 from __future__ import annotations
 
 import os
 import tempfile
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -44,6 +48,11 @@ def write_report(path: str | os.PathLike[str], xml_text: str) -> None:
         raise
 
 
+def iso_timestamp(epoch: float) -> str:
+    """``epoch`` (seconds) as local time in ISO 8601 without fraction or zone, as JUnit readers expect."""
+    return time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(epoch))
+
+
 def parse_error_result(scenario_file: str, message: str, output: str = "") -> ScenarioResult:
     """The failing result recorded when ``scenario_file`` could not be loaded."""
     return ScenarioResult(f"Parsing of {scenario_file}", False, message, output or message)
@@ -56,8 +65,10 @@ def write_results(directory: str | os.PathLike, results: Sequence[ScenarioResult
     cases = []
     for result in results:
         case = TestCase(result.name, classname=CLASSNAME, elapsed_sec=round(result.duration, 6),
-                        timestamp=result.start_time or None)
-        if not result.passed:
+                        timestamp=iso_timestamp(result.start_time) if result.start_time else None)
+        if result.skipped:
+            case.add_skipped_info(message=result.message or "not run")
+        elif not result.passed:
             case.add_failure_info(message=result.message or "failed", output=result.output or result.message)
         cases.append(case)
     suite = TestSuite(SUITE_NAME, cases)
@@ -77,3 +88,33 @@ def write_grouped(results: Sequence[ScenarioResult], root: str | None, per_scena
         if directory:
             groups.setdefault(directory, []).append(result)
     return [write_results(directory, group) for directory, group in groups.items()]
+
+
+class ReportWriter:
+    """Keeps ``test.xml`` up to date while scenarios finish: each :meth:`update` rewrites the report(s)
+    whose content changed (atomically), so a killed run leaves the results of every finished scenario.
+    """
+
+    def __init__(self, root: str | None, per_scenario: bool) -> None:
+        self.root = root
+        self.per_scenario = per_scenario
+        self._written: dict[str | None, tuple] = {}
+
+    def update(self, results: Sequence[ScenarioResult]) -> list[Path]:
+        """Write the report(s) for ``results`` (all results so far); returns the paths written."""
+        if not self.per_scenario:
+            groups = {self.root: list(results)} if self.root else {}
+        else:
+            groups = {}
+            for result in results:
+                directory = result.output_dir or self.root
+                if directory:
+                    groups.setdefault(directory, []).append(result)
+        written = []
+        for directory, group in groups.items():
+            key = tuple((id(r), r.passed, r.skipped, r.message) for r in group)
+            if self._written.get(directory) == key:
+                continue
+            written.append(write_results(directory, group))
+            self._written[directory] = key
+        return written

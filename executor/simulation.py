@@ -20,6 +20,8 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
+import math
+import numbers
 import sys
 import time
 from abc import ABC, abstractmethod
@@ -29,6 +31,22 @@ from pathlib import Path
 
 class SimulationError(Exception):
     """A simulation could not be loaded, or does not fit the scenario (e.g. missing reset arguments)."""
+
+
+class SimulationStepError(SimulationError):
+    """The simulation's ``step()`` raised while a scenario ran (the scenario fails)."""
+
+
+def simulation_dt(simulation: object) -> float:
+    """The simulation's ``dt`` as seconds; :class:`SimulationError` unless it is a positive, finite number."""
+    name = type(simulation).__name__
+    try:
+        dt = simulation.dt
+    except Exception as exc:  # noqa: BLE001 - user code (a property)
+        raise SimulationError(f"simulation {name}: reading dt raised {type(exc).__name__}: {exc}") from exc
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt) or dt <= 0:
+        raise SimulationError(f"simulation {name}: dt must be a positive, finite number of seconds, got {dt!r}")
+    return float(dt)
 
 
 class Clock:
@@ -59,8 +77,8 @@ class SimulationClock(Clock):
     __slots__ = ("dt", "steps", "_time")
 
     def __init__(self, dt: float) -> None:
-        if not dt or dt <= 0:
-            raise SimulationError(f"simulation dt must be a positive number of seconds, got {dt!r}")
+        if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt) or dt <= 0:
+            raise SimulationError(f"simulation dt must be a positive, finite number of seconds, got {dt!r}")
         self.dt = float(dt)
         self.steps = 0
         self._time = 0.0

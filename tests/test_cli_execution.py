@@ -132,3 +132,214 @@ def test_sigterm_records_aborted_and_ends_children(tmp_path):
     root = ET.parse(tmp_path / "out/test.xml").getroot()
     assert [c.get("name") for c in root.iter("testcase")] == ["long"]
     assert root.find(".//failure").get("message") == "aborted"
+
+
+# -- results survive a kill; an abort lists what never ran ------------------------------------------
+
+THREE = HELPERS + ("scenario a:\n    do log('a done')\n"
+                   "scenario b:\n    do serial:\n        log('b started')\n        wait elapsed(30s)\n"
+                   "scenario c:\n    do log('c done')\n")
+
+
+def start_until(tmp_path: Path, marker: str, *args: str) -> subprocess.Popen:
+    """Start scenario_execution and return once ``marker`` is on its output."""
+    process = subprocess.Popen([EXE, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    for line in process.stdout:
+        if marker in line:
+            return process
+    process.wait(timeout=20)
+    raise AssertionError(f"'{marker}' never printed (exit code {process.returncode})")
+
+
+@needs_frontend
+def test_kill_9_keeps_the_results_of_finished_scenarios(tmp_path):
+    write(tmp_path, "abc.osc", THREE)
+    process = start_until(tmp_path, "b started", "abc.osc", "-o", "out")
+    process.kill()
+    process.wait(timeout=20)
+    suite, names = junit(tmp_path / "out/test.xml")
+    assert names == ["a"] and suite.get("failures") == "0"
+    assert not list((tmp_path / "out").glob(".test.xml.*"))  # no half-written report left behind
+
+
+@needs_frontend
+def test_ctrl_c_records_scenarios_that_never_started_as_skipped(tmp_path):
+    write(tmp_path, "abc.osc", THREE)
+    process = start_until(tmp_path, "b started", "abc.osc", "-o", "out")
+    process.send_signal(signal.SIGINT)
+    output = process.stdout.read()
+    process.wait(timeout=20)
+    assert process.returncode == 128 + signal.SIGINT, output
+    suite, names = junit(tmp_path / "out/test.xml")
+    assert names == ["a", "b", "c"]
+    assert suite.get("failures") == "1" and suite.get("skipped") == "1"
+    cases = {case.get("name"): case for case in suite.iter("testcase")}
+    assert cases["b"].find("failure").get("message") == "aborted"
+    assert cases["c"].find("skipped").get("message").startswith("not run")
+    assert "c done" not in output
+
+
+@needs_frontend
+def test_junit_timestamps_are_iso_8601(tmp_path):
+    import datetime
+    import re
+
+    write(tmp_path, "ok.osc", HELPERS + "scenario ok:\n    do log('x')\n")
+    before = datetime.datetime.now().replace(microsecond=0)
+    done = run_cli("ok.osc", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    stamp = ET.parse(tmp_path / "out/test.xml").getroot().find(".//testcase").get("timestamp")
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d", stamp), stamp
+    assert abs((datetime.datetime.fromisoformat(stamp) - before).total_seconds()) < 60
+
+
+# -- option values -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("value", ["inf", "-inf", "nan", "0", "-1", "1e400", "1e300", "fast"])
+def test_step_duration_must_be_a_positive_finite_number(tmp_path, value):
+    write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('ran')\n")
+    done = run_cli("s.osc", "-s", value, cwd=tmp_path)
+    assert done.returncode == 2, done.stdout
+    assert "--step-duration" in done.stdout and "Traceback" not in done.stdout and "ran" not in done.stdout
+
+
+SIMULATIONS = """\
+class Sim:
+    def __init__(self):
+        self.dt = DT
+    def step(self):
+        pass
+
+
+class Boom:
+    dt = 0.1
+    def step(self):
+        raise RuntimeError("step exploded")
+"""
+
+
+@needs_frontend
+@pytest.mark.parametrize("dt", ["0", "-0.5", "float('nan')", "float('inf')", "'fast'"])
+def test_simulation_dt_must_be_positive_and_finite(tmp_path, dt):
+    write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('ran')\n")
+    write(tmp_path, "sims.py", f"DT = {dt}\n" + SIMULATIONS)
+    done = run_cli("s.osc", "--simulation", "sims.py:Sim", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 1, done.stdout
+    assert "internal error" not in done.stdout and "Traceback" not in done.stdout
+    assert "dt must be a positive, finite number" in done.stdout and "Sim" in done.stdout
+    assert done.stdout.count("error") == 1 and "ran" not in done.stdout
+    suite, names = junit(tmp_path / "out/test.xml")
+    assert names == ["s"] and suite.get("failures") == "1"
+
+
+@needs_frontend
+def test_simulation_step_failure_names_the_step_and_class(tmp_path):
+    write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do wait elapsed(1s)\n")
+    write(tmp_path, "sims.py", "DT = 0.1\n" + SIMULATIONS)
+    done = run_cli("s.osc", "--simulation", "sims.py:Boom", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stdout
+    message = ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").get("message")
+    assert message == "simulation step (Boom.step()) raised RuntimeError: step exploded"
+
+
+# -- plugin actions that raise -----------------------------------------------------------------------
+
+PLUGINS = """\
+from executor.actions import ActionBase
+
+
+class RaiseUpdate(ActionBase):
+    def update(self):
+        raise RuntimeError("update exploded")
+
+
+class RaiseExecute(ActionBase):
+    def execute(self, value):
+        raise RuntimeError(f"execute exploded on {value}")
+
+
+class RaiseSetup(ActionBase):
+    def setup(self, **kwargs):
+        raise RuntimeError("setup exploded")
+
+
+class RaiseShutdown(ActionBase):
+    def shutdown(self):
+        raise RuntimeError("shutdown exploded")
+"""
+
+
+def install_plugins(tmp_path: Path) -> None:
+    """A real distribution on PYTHONPATH (run_cli puts the cwd there) whose entry points name the actions."""
+    write(tmp_path, "raising_actions.py", PLUGINS)
+    info = tmp_path / "raising_actions-0.1.dist-info"
+    info.mkdir()
+    write(info, "METADATA", "Metadata-Version: 2.1\nName: raising-actions\nVersion: 0.1\n")
+    write(info, "entry_points.txt", "[scenario_execution.actions]\n" + "".join(
+        f"{name} = raising_actions:{cls}\n" for name, cls in
+        (("raise_update", "RaiseUpdate"), ("raise_execute", "RaiseExecute"), ("raise_setup", "RaiseSetup"),
+         ("raise_shutdown", "RaiseShutdown"))))
+
+
+@needs_frontend
+@pytest.mark.parametrize("action, expected", [
+    ("raise_update()", "t.osc:8:9: error: action 'raise_update': update() raised RuntimeError: update exploded"),
+    ("raise_execute(3)", "t.osc:8:9: error: action 'raise_execute': execute() raised RuntimeError: "
+                         "execute exploded on 3"),
+    ("raise_setup()", "setup failed: t.osc:8:9: error: action 'raise_setup': setup() raised RuntimeError: "
+                      "setup exploded"),
+])
+def test_plugin_failures_name_the_action_and_its_position(tmp_path, action, expected):
+    install_plugins(tmp_path)
+    write(tmp_path, "t.osc", HELPERS + "action raise_update\naction raise_setup\naction raise_execute:\n"
+                                       "    value: int\nscenario s:\n    do serial:\n        " + action + "\n")
+    done = run_cli("t.osc", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stdout
+    assert f"Scenario 's' failed: {expected}" in done.stdout
+    assert ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").get("message") == expected
+
+
+@needs_frontend
+def test_plugin_shutdown_failure_names_the_action_and_its_position(tmp_path):
+    install_plugins(tmp_path)
+    write(tmp_path, "t.osc", HELPERS + "action raise_shutdown\nscenario s:\n    do serial:\n        log('x')\n"
+                                       "        raise_shutdown()\n")
+    done = run_cli("t.osc", cwd=tmp_path)
+    assert "t.osc:6:9: error: action 'raise_shutdown': shutdown() raised RuntimeError: shutdown exploded" \
+        in done.stdout, done.stdout
+
+
+# -- parameter files -----------------------------------------------------------------------------------
+
+PARAMETERISED = HELPERS + "scenario x:\n    speed: float = 1.0\n    label: string = 'label is 1'\n    do log(label)\n"
+
+
+@needs_frontend
+@pytest.mark.parametrize("text, expected", [
+    ("x:\n  speed: 2.0\n---\nx:\n  nosuch: 1\n", "p.yaml:5:3: error: scenario 'x' has no parameter 'nosuch'"),
+    ("nosuch: 1\n", "p.yaml:1:1: error: parameter file names unknown scenario 'nosuch'"),
+    ("x:\n  speed: fast\n", "p.yaml:2:3: error: parameter 'x.speed'"),
+    ("x:\n  _output_dir: 5\n", "p.yaml:2:3: error: 'x._output_dir'"),
+    ("x:\n  speed: 2.0\n  speed: 3.0\n", "p.yaml:3:3: error: duplicate key 'speed' (first at line 2)"),
+    ("x: {}\nx: {}\n", "p.yaml:2:1: error: duplicate key 'x'"),
+])
+def test_parameter_file_errors_name_the_file_and_key(tmp_path, text, expected):
+    write(tmp_path, "x.osc", PARAMETERISED)
+    write(tmp_path, "p.yaml", text)
+    done = run_cli("x.osc", "--scenario-parameter-file", "p.yaml", "-o", "out", cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stdout
+    assert done.stdout.startswith(expected), done.stdout
+    assert "label is" not in done.stdout
+    assert expected in ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").text
+
+
+@needs_frontend
+def test_empty_parameter_document_runs_defaults_and_says_so_once(tmp_path):
+    write(tmp_path, "x.osc", PARAMETERISED)
+    write(tmp_path, "p.yaml", "x:\n  label: label is 2\n---\n---\nx:\n  label: label is 3\n")
+    done = run_cli("x.osc", "--scenario-parameter-file", "p.yaml", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout
+    assert done.stdout.count("document 2 is empty: scenarios run with their defaults") == 1
+    assert done.stdout.count("is empty") == 1
+    assert done.stdout.index("label is 2") < done.stdout.index("label is 1") < done.stdout.index("label is 3")

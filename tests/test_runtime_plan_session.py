@@ -11,7 +11,7 @@ from runtime_models import log, parameter, scenario, serial, wait_elapsed
 
 from coverage_engine import model as m
 from coverage_engine.errors import ParameterFileError
-from executor.junit import parse_error_result, write_grouped, write_results
+from executor.junit import ReportWriter, parse_error_result, write_grouped, write_results
 from executor.runtime.logger import Logger
 from executor.runtime.plan import PlannedRun, plan_runs, split_output_dirs
 from executor.runtime.results import ScenarioResult
@@ -116,3 +116,18 @@ def test_junit_files(tmp_path):
     assert sorted(os.path.relpath(p, tmp_path) for p in written) == ["bad/test.xml", "root/test.xml"]
     error = write_results(tmp_path / "err", [parse_error_result("x.osc", "syntax error")])
     assert ET.parse(error).getroot().find("testsuite").get("failures") == "1"
+
+
+def test_report_writer_rewrites_only_the_reports_that_changed(tmp_path):
+    writer = ReportWriter(str(tmp_path), per_scenario=True)
+    first = ScenarioResult("a", True, start_time=1.0, output_dir=str(tmp_path / "a"))
+    assert writer.update([first]) == [tmp_path / "a/test.xml"]
+    second = ScenarioResult("b", False, "not run", output_dir=str(tmp_path / "b"), skipped=True)
+    assert writer.update([first, second]) == [tmp_path / "b/test.xml"]
+    assert writer.update([first, second]) == []
+    case = ET.parse(tmp_path / "b/test.xml").getroot().find(".//testcase")
+    assert case.find("skipped").get("message") == "not run" and case.get("timestamp") is None
+    combined = ReportWriter(str(tmp_path / "all"), per_scenario=False)
+    assert combined.update([first, second]) == [tmp_path / "all/test.xml"]
+    suite = ET.parse(tmp_path / "all/test.xml").getroot().find("testsuite")
+    assert suite.get("tests") == "2" and suite.get("skipped") == "1" and suite.get("failures") == "0"

@@ -3,7 +3,9 @@
 ``serial`` → ``Sequence(memory=True)``; ``parallel`` → ``Parallel`` that succeeds when all children
 did; ``one_of`` → ``Parallel`` that ends as soon as one child ends; members keep their label as
 name. Actions are plugin instances whose arguments are bound here: the ones their ``__init__`` names
-are computed now, the rest each time the action starts (see :mod:`executor.actions.base`).
+are computed now, the rest each time the action starts (see :mod:`executor.actions.base`). Their
+life-cycle methods are guarded so that an exception from plugin code names the action and where it
+is invoked (:class:`ActionRuntimeError`), the way a failing ``__init__`` does.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import py_trees
 from py_trees.common import ParallelPolicy
 
 from coverage_engine.errors import OscError
-from coverage_engine.evaluate import evaluate
+from coverage_engine.evaluate import EvaluationError, evaluate
 from coverage_engine.model import (
     ActionCall,
     Behavior,
@@ -29,14 +31,19 @@ from coverage_engine.model import (
     WaitElapsed,
     WaitEvent,
 )
+from executor.actions.base import ActionError
 from executor.actions.registry import load_action_class
 from executor.runtime import behaviours
-from executor.runtime.context import ScenarioContext, VariableHandle
+from executor.runtime.context import ScenarioContext, ScenarioEnd, VariableHandle
 from executor.runtime.modifiers import ModifierError, build_modifier
 
 
 class BuildError(OscError):
     """cannot build the behaviour tree"""
+
+
+class ActionRuntimeError(OscError):
+    """an action failed while the scenario ran"""
 
 
 def build_tree(scenario: Scenario, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
@@ -141,7 +148,39 @@ def make_action(call: ActionCall, context: ScenarioContext) -> py_trees.behaviou
             instance._execute_arguments = _argument_binder(instance, selected, context)
     instance.name = call.name
     instance.logger = context.logger.child(call.name)
+    _guard_life_cycle(instance, call)
     return instance
+
+
+#: The plugin methods whose exceptions are reported with the action's name and location.
+GUARDED_METHODS = ("setup", "initialise", "execute", "update", "terminate", "shutdown")
+
+#: Exceptions that pass unchanged: control flow, and errors that already say where they come from.
+_PASS_THROUGH = (ScenarioEnd, OscError, EvaluationError)
+
+
+def _guard_life_cycle(instance, call: ActionCall) -> None:
+    """Wrap the instance's life-cycle methods (instance attributes: the class stays untouched)."""
+    for phase in GUARDED_METHODS:
+        method = getattr(instance, phase, None)
+        if method is not None:
+            setattr(instance, phase, _guarded(method, phase, call))
+
+
+def _guarded(method: Callable, phase: str, call: ActionCall) -> Callable:
+    def guarded(*args, **kwargs):
+        try:
+            return method(*args, **kwargs)
+        except _PASS_THROUGH:
+            raise
+        except ActionError as exc:  # the action's own message is meant for users
+            raise ActionRuntimeError(f"action '{call.action}': {exc}", call.location) from exc
+        except Exception as exc:  # noqa: BLE001 - plugin code
+            raise ActionRuntimeError(f"action '{call.action}': {phase}() raised {type(exc).__name__}: {exc}",
+                                     call.location) from exc
+
+    guarded.__wrapped__ = method  # type: ignore[attr-defined]
+    return guarded
 
 
 def _names(names: list[str]) -> str:

@@ -51,12 +51,12 @@ def split_output_dirs(document: Mapping | None) -> tuple[dict | None, dict[str, 
             target = values.pop(OUTPUT_DIR_KEY)
             if not isinstance(target, str) or not target.strip():
                 raise ParameterFileError(
-                    f"{scenario_name}.{OUTPUT_DIR_KEY}: expected a directory path (string), got {target!r}")
+                    f"'{scenario_name}.{OUTPUT_DIR_KEY}': expected a directory path (string), got {target!r}")
             if not os.path.isabs(target):
                 normal = os.path.normpath(target)
                 if normal == os.pardir or normal.startswith(os.pardir + os.sep):
                     raise ParameterFileError(
-                        f"{scenario_name}.{OUTPUT_DIR_KEY}: '{target}' leaves the output directory; "
+                        f"'{scenario_name}.{OUTPUT_DIR_KEY}': '{target}' leaves the output directory; "
                         "use a path inside it, or an absolute path")
             dirs[str(scenario_name)] = target
         overrides[scenario_name] = values

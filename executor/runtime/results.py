@@ -6,13 +6,17 @@ from __future__ import annotations
 class ScenarioResult:
     """``passed`` or not; on failure a one-line ``message`` and ``output`` (the last tree snapshot).
 
+    ``skipped``: the scenario never started (the session was aborted before it); ``message`` says why.
+
     A plain class rather than a dataclass: it is imported on every run, where start-up time counts.
     """
 
-    __slots__ = ("name", "passed", "message", "output", "duration", "start_time", "output_dir", "aborted")
+    __slots__ = ("name", "passed", "message", "output", "duration", "start_time", "output_dir", "aborted",
+                 "skipped")
 
     def __init__(self, name: str, passed: bool, message: str = "", output: str = "", duration: float = 0.0,
-                 start_time: float = 0.0, output_dir: str | None = None, aborted: bool = False) -> None:
+                 start_time: float = 0.0, output_dir: str | None = None, aborted: bool = False,
+                 skipped: bool = False) -> None:
         self.name = name
         self.passed = passed
         self.message = message
@@ -21,7 +25,8 @@ class ScenarioResult:
         self.start_time = start_time
         self.output_dir = output_dir
         self.aborted = aborted
+        self.skipped = skipped
 
     def __repr__(self) -> str:
-        state = "passed" if self.passed else f"failed: {self.message}"
+        state = "passed" if self.passed else f"{'skipped' if self.skipped else 'failed'}: {self.message}"
         return f"ScenarioResult({self.name!r}, {state})"

@@ -23,6 +23,7 @@ from executor.actions.base import ActionError
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
 from executor.runtime.results import ScenarioResult
+from executor.simulation import SimulationError, SimulationStepError
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]
 
@@ -37,7 +38,7 @@ def snapshot(root: py_trees.behaviour.Behaviour) -> str:
 
 def describe_error(exc: BaseException) -> str:
     """One line for an exception raised while a scenario ran."""
-    if isinstance(exc, OscError):
+    if isinstance(exc, (OscError, SimulationError)):
         return str(exc)
     if isinstance(exc, (ActionError, EvaluationError)):
         location = getattr(exc, "location", None)
@@ -115,7 +116,11 @@ class ScenarioRunner:
         now = clock.now
         wake = -1.0
         while True:
-            step()
+            try:
+                step()
+            except Exception as exc:  # noqa: BLE001 - user code; named, the scenario fails
+                raise SimulationStepError(
+                    f"simulation step ({type(simulation).__name__}.step()) raised {type(exc).__name__}: {exc}") from exc
             advance()
             if now() < wake:
                 continue
@@ -142,7 +147,8 @@ class ScenarioRunner:
             try:
                 shutdown()
             except Exception as exc:  # noqa: BLE001 - one action's cleanup must not stop the others
-                self.context.logger.error(f"shutdown of '{node.name}': {describe_error(exc)}")
+                where = "" if isinstance(exc, OscError) else f"shutdown of '{node.name}': "
+                self.context.logger.error(where + describe_error(exc))
 
     # -- the whole run -----------------------------------------------------------------------------
 

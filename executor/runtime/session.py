@@ -2,8 +2,10 @@
 
 A session owns what spans scenarios: the simulation (``setup`` once, ``reset`` before each scenario
 with its parameters, ``shutdown`` once), the SIGINT/SIGTERM handlers (the running scenario is
-recorded as failed with "aborted", its processes are ended and nothing else runs), and the list of
-results. A failing scenario never stops the following ones.
+recorded as failed with "aborted", its processes are ended, nothing else runs and the scenarios that
+never started are recorded as skipped), and the list of results. A failing scenario never stops the
+following ones. ``on_result`` is called with all results so far each time a scenario finishes (the
+command rewrites ``test.xml`` there).
 """
 
 from __future__ import annotations
@@ -18,7 +20,10 @@ from executor.runtime.external_methods import set_directories
 from executor.runtime.logger import Logger
 from executor.runtime.plan import PlannedRun
 from executor.runtime.results import ScenarioResult
-from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments
+from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments, simulation_dt
+
+#: The message of a scenario that an abort kept from starting.
+NOT_STARTED = "not run: the run was aborted before this scenario started"
 
 
 class SessionOptions:
@@ -26,13 +31,15 @@ class SessionOptions:
 
     def __init__(self, tick_period: float = 0.1, simulation: object | None = None, input_dir: str | None = None,
                  output_root: str | None = None, observer_factory: Callable[[str], list] | None = None,
-                 debug: bool = False) -> None:
+                 debug: bool = False,
+                 on_result: Callable[[list[ScenarioResult]], None] | None = None) -> None:
         self.tick_period = tick_period
         self.simulation = simulation
         self.input_dir = input_dir
         self.output_root = output_root
         self.observer_factory = observer_factory
         self.debug = debug
+        self.on_result = on_result
 
 
 class SessionOutcome:
@@ -72,19 +79,23 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
     from executor.runtime.runner import RunAborted, ScenarioRunner
 
     outcome = SessionOutcome()
+    results = outcome.results
     simulation = options.simulation
     sim_clock = None
+    on_result = options.on_result
     with abort_on_signals():
         try:
             if simulation is not None:
-                sim_clock = SimulationClock(simulation.dt)
                 try:
-                    simulation.setup(logger=logger, output_dir=options.output_root, tick_period=sim_clock.dt)
+                    sim_clock = SimulationClock(simulation_dt(simulation))
+                    setup = getattr(simulation, "setup", None)  # optional, like reset and shutdown
+                    if setup is not None:
+                        setup(logger=logger, output_dir=options.output_root, tick_period=sim_clock.dt)
                 except Exception as exc:  # noqa: BLE001 - user code
-                    message = f"simulation setup failed: {type(exc).__name__}: {exc}"
+                    message = str(exc) if isinstance(exc, SimulationError) else \
+                        f"simulation setup failed: {type(exc).__name__}: {exc}"
                     logger.error(message)
-                    outcome.results.extend(ScenarioResult(r.name, False, message, output_dir=r.output_dir)
-                                           for r in runs)
+                    results.extend(ScenarioResult(r.name, False, message, output_dir=r.output_dir) for r in runs)
                     simulation = None
                     return outcome
             for run in runs:
@@ -95,7 +106,9 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                     failure = _reset_simulation(simulation, run)
                     if failure is not None:
                         logger.error(f"Scenario '{run.name}' failed: {failure.message}")
-                        outcome.results.append(failure)
+                        results.append(failure)
+                        if on_result is not None:
+                            on_result(results)
                         continue
                     sim_clock.reset()
                 context = ScenarioContext(
@@ -107,24 +120,34 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                                         tick_period=sim_clock.dt if simulation is not None else options.tick_period,
                                         simulation=simulation, observers=observers)
                 try:
-                    outcome.results.append(runner.run())
+                    results.append(runner.run())
                 except RunAborted as aborted:
-                    outcome.results.append(aborted.result)
+                    results.append(aborted.result)
                     outcome.aborted = aborted.signum
                     break
-        except Aborted as exc:  # between scenarios
+                if on_result is not None:
+                    on_result(results)
+        except Aborted as exc:  # between scenarios (or while a report was written)
             outcome.aborted = exc.signum
         finally:
             if simulation is not None:
                 try:
-                    simulation.shutdown()
+                    shutdown = getattr(simulation, "shutdown", None)
+                    if shutdown is not None:
+                        shutdown()
                 except Exception as exc:  # noqa: BLE001 - user code
                     logger.error(f"simulation shutdown failed: {type(exc).__name__}: {exc}")
+    if outcome.aborted:
+        recorded = {result.name for result in results}
+        results.extend(ScenarioResult(r.name, False, NOT_STARTED, output_dir=r.output_dir, skipped=True)
+                       for r in runs if r.name not in recorded)
     return outcome
 
 
 def _reset_simulation(simulation, run: PlannedRun) -> ScenarioResult | None:
     """Reset the simulation for ``run``; a failed result when that is impossible."""
+    if getattr(simulation, "reset", None) is None:
+        return None
     try:
         kwargs = reset_arguments(simulation, run.scenario.parameter_values(), run.name)
     except SimulationError as exc:

@@ -4,13 +4,15 @@ Thin click command: options in, :mod:`cli._variation` does the work, errors beco
 ``file:line:col: error: …`` message and an exit code. Only click is imported at start-up; the front
 end, rich and SQLAlchemy are imported when needed, so ``-h`` and errors are quick.
 
-Exit codes: 0 every combination was generated · 1 the input is wrong, the store cannot be used, or
-some combinations did not resolve (they are reported and skipped, the others are written) ·
-2 usage error · 130 interrupted.
+Exit codes: 0 every combination was generated · 1 the input is wrong, the store cannot be used,
+more combinations than ``--max-variants``, or some combinations did not resolve (they are reported
+and skipped, the others are written) · 2 usage error · 130 interrupted (SIGINT or SIGTERM; the files
+written so far are all recorded in the store).
 """
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import click
@@ -30,14 +32,16 @@ EXIT_INTERRUPTED = 130
               help="SQLAlchemy URL of the store (default: $SCENARIO_STORE, else .scenario_store.db here).")
 @click.option("--scenario-parameter-file", type=click.Path(dir_okay=False),
               help="YAML file of scenario parameter values; each document is one more dimension.")
+@click.option("--max-variants", type=click.IntRange(min=1), default=10_000_000, show_default=True, metavar="N",
+              help="Refuse to start when the file has more combinations than N.")
 @click.argument("scenario", type=click.Path(dir_okay=False))
-def command(scenario, output_dir, debug, log_model, list_only, store, scenario_parameter_file):
+def command(scenario, output_dir, debug, log_model, list_only, store, scenario_parameter_file, max_variants):
     """Generate one concrete scenario (.sce) per combination of the values listed in SCENARIO (.osc).
 
     Every keep(it.<param> in [v1, v2, ...]) is one dimension; the first varies slowest.
     """
     options = {"output_dir": output_dir, "debug": debug, "log_model": log_model, "list": list_only,
-               "store": store, "scenario_parameter_file": scenario_parameter_file}
+               "store": store, "scenario_parameter_file": scenario_parameter_file, "max_variants": max_variants}
     sys.exit(_guarded(scenario, options))
 
 
@@ -46,16 +50,20 @@ def _guarded(scenario: str, options: dict) -> int:
     from coverage_engine.errors import OscError
 
     debug = options["debug"]
+    previous = _terminate_like_interrupt()
     try:
-        from cli._variation import VariationStoreError, run
+        from cli._variation import TooManyVariants, VariationStoreError, run
 
         return run(scenario, options)
-    except (OscError, VariationStoreError) as exc:
+    except (OscError, VariationStoreError, TooManyVariants) as exc:
         if debug:
             import traceback
 
             traceback.print_exc()
-        click.echo(exc.render() if isinstance(exc, OscError) else f"error: {exc}", err=True)
+        if isinstance(exc, OscError):
+            click.echo(exc.render(), err=True)
+        else:
+            click.echo(str(exc) if isinstance(exc, TooManyVariants) else f"error: {exc}", err=True)
         return EXIT_FAILED
     except KeyboardInterrupt:
         click.echo("interrupted", err=True)
@@ -72,6 +80,23 @@ def _guarded(scenario: str, options: dict) -> int:
             raise
         click.echo(f"error: internal error: {type(exc).__name__}: {exc} (run with -d for details)", err=True)
         return EXIT_FAILED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate_like_interrupt():
+    """SIGTERM stops the command like Ctrl-C does (exit 130, no traceback); returns the previous handler.
+
+    While files are written, :mod:`cli._variation` takes both signals over to stop cleanly.
+    """
+    def interrupt(_signum, _frame):
+        raise KeyboardInterrupt
+
+    try:
+        return signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread (e.g. CliRunner in a thread)
+        return None
 
 
 def main() -> None:

@@ -3,9 +3,9 @@
 ``scenario_variation`` writes one ``.sce`` per combination of varied values; ``scenario_execution``
 loads it exactly like the ``.osc`` it came from (see :mod:`coverage_engine.loader`). A file looks like::
 
-    # scenario_variation .sce, format 1: variant 1 of example.osc
+    # scenario_variation .sce, format 2: variant 1 of example.osc
     # example_variation.log.msg = "bar"
-    format_version: 1
+    format_version: 2
     source: "example.osc"
     source_sha256: "9f86d08…"
     source_dir: ".."
@@ -17,6 +17,7 @@ loads it exactly like the ``.osc`` it came from (see :mod:`coverage_engine.loade
       import osc.helpers
       scenario example_variation:
       ...
+    # end of .sce
 
 Why this shape:
 
@@ -28,6 +29,9 @@ Why this shape:
   path on a batch host) and its ``.sce`` files still load; :func:`read_sce` returns it absolute.
 * The model's lines are given back with as many blank lines in front as the block starts below the
   top of the file, so an error in a ``.sce`` names the ``.sce`` line the user sees.
+* The last line, ``# end of .sce``, is what tells a complete file from one cut short (format 2; files
+  of format 1 have no such line and are still read). ``source_sha256`` is provenance only (which
+  ``.osc`` text the variant came from); loading never compares it: the model is in the file.
 * Everything written is deterministic (no time stamps): the SHA-256 of the text is the variant's
   identity in the store, and regenerating the same input gives byte-identical files.
 
@@ -47,11 +51,17 @@ from pathlib import Path
 from coverage_engine.errors import SceFormatError
 from coverage_engine.syntax import Location
 
-#: The format version this release writes and reads.
-SCE_FORMAT_VERSION = 1
+#: The format version this release writes.
+SCE_FORMAT_VERSION = 2
+#: The versions this release reads. Version 2 is version 1 plus the closing :data:`SCE_END` line.
+SCE_READABLE_VERSIONS = (1, 2)
 
 #: First line of every file we write (also how an earlier generation's files are recognised).
 SCE_MAGIC = "# scenario_variation .sce"
+#: Last line of every file of version 2: a file without it was cut short (disk full, killed copy).
+SCE_END = "# end of .sce"
+
+_DECLARED_VERSION = re.compile(re.escape(SCE_MAGIC) + r", format (\d+)")
 
 _REQUIRED = {
     "format_version": int,
@@ -173,10 +183,13 @@ class SceTemplate:
             parts.append(self._documents[choices[-1]])
         model = _join(self._chunks, self._replacements, choices)
         if self._block:
-            parts += ["model: |2\n", model]
+            parts += ["model: |2\n", model, _END_LINE]
         else:
-            parts += ["model: ", _quote(model.rstrip("\n") + "\n"), "\n"]
+            parts += ["model: ", _quote(model.rstrip("\n") + "\n"), "\n", _END_LINE]
         return "".join(parts)
+
+
+_END_LINE = SCE_END + "\n"
 
 
 def _join(chunks: list[str], replacements: list[list[str]], choices) -> str:
@@ -247,12 +260,39 @@ def _model_first_line(text: str) -> int:
     return 0
 
 
+def _truncated(text: str, path: str) -> SceFormatError:
+    lines = text.rstrip("\n").count("\n") + 1
+    return SceFormatError(f"truncated .sce file: it ends at line {lines} without the closing '{SCE_END}' line "
+                          "(the file was cut short; generate it again with scenario_variation)",
+                          Location(path, lines, 1))
+
+
+def _is_complete(text: str) -> bool:
+    """Whether the text's last non-blank line is :data:`SCE_END` (model lines are indented or quoted)."""
+    return text.rstrip().rpartition("\n")[2] == SCE_END
+
+
+def _line_of_key(text: str, key: str) -> int:
+    for number, line in enumerate(text.split("\n"), start=1):
+        if line.startswith(key + ":"):
+            return number
+    return 1
+
+
+def _declared_scenarios(model: str) -> list[str]:
+    return re.findall(r"^scenario[ \t]+([A-Za-z_][\w.]*)", model, re.MULTILINE)
+
+
 def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     """Read the text of a ``.sce`` file; ``source_dir`` is made absolute against ``path``'s folder.
 
-    Raises :class:`~coverage_engine.errors.SceFormatError` for anything malformed or an unknown
-    format version.
+    Raises :class:`~coverage_engine.errors.SceFormatError` for anything malformed, an unknown format
+    version, a version 2 file without its closing line (truncated), or a ``scenario`` the model does
+    not declare.
     """
+    declared = _DECLARED_VERSION.match(text)
+    if declared is not None and int(declared.group(1)) >= 2 and not _is_complete(text):
+        raise _truncated(text, path)
     data = _load_yaml(text, path)
     where = Location(path, 1, 1)
     if not isinstance(data, dict):
@@ -260,10 +300,13 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     version = data.get("format_version")
     if version is None:
         raise SceFormatError("not a .sce file: 'format_version' is missing", where)
-    if version != SCE_FORMAT_VERSION or isinstance(version, bool):
+    if version not in SCE_READABLE_VERSIONS or isinstance(version, bool):
+        readable = " and ".join(str(v) for v in SCE_READABLE_VERSIONS)
         raise SceFormatError(
-            f"unsupported .sce format version {version!r}; this release reads version {SCE_FORMAT_VERSION} "
+            f"unsupported .sce format version {version!r}; this release reads versions {readable} "
             f"(regenerate the file with this release's scenario_variation)", where)
+    if version >= 2 and not _is_complete(text):
+        raise _truncated(text, path)
     for key, kind in _REQUIRED.items():
         if key not in data:
             raise SceFormatError(f"malformed .sce file: '{key}' is missing", where)
@@ -276,14 +319,21 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     index = data.get("index")
     if index is not None and (not isinstance(index, int) or isinstance(index, bool)):
         raise SceFormatError("malformed .sce file: 'index' must be an integer", where)
-    first = _model_first_line(text)
     model = data["model"]
+    scenario = data["scenario"]
+    if scenario:
+        scenarios = _declared_scenarios(model)
+        if scenario not in scenarios:
+            known = ", ".join(scenarios) if scenarios else "none"
+            raise SceFormatError(f"malformed .sce file: scenario {scenario!r} is not declared in its model "
+                                 f"(scenarios there: {known})", Location(path, _line_of_key(text, "scenario"), 11))
+    first = _model_first_line(text)
     padded = "\n" * (first - 1) + model if first > 0 else model
     base = Path(path).parent if path and not path.startswith("<") else Path.cwd()
     source_dir = str((base / data["source_dir"]).resolve()) if data["source_dir"] else str(base.resolve())
     extra = {k: v for k, v in data.items() if k not in _REQUIRED and k not in ("parameters", "index")}
     return SceDocument(
-        text=padded, source_dir=source_dir, scenario=data["scenario"], assignment=dict(data["assignment"]),
+        text=padded, source_dir=source_dir, scenario=scenario, assignment=dict(data["assignment"]),
         format_version=version, source=data["source"], source_sha256=data["source_sha256"],
         index=index, parameters=parameters, path=path, extra=extra)
 

@@ -14,8 +14,9 @@ Tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
     lookup by path (what the batch executor does) finds exactly the variant now in that file.
     ``assignment`` is a JSON object (``"scenario.path": value``) and ``run_id`` the last run that wrote it.
 
-Writes are executemany batches inside one transaction, fed from an iterator, so 100,000 rows take
-seconds and memory does not grow with their number.
+Writes are executemany batches, each committed on its own (:class:`VariationRecorder`), so
+100,000 rows take seconds, memory does not grow with their number, and a run stopped half way keeps
+the rows of every file it wrote.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from itertools import islice
@@ -39,6 +41,7 @@ from sqlalchemy import (
     Text,
     UniqueConstraint,
     and_,
+    bindparam,
     insert,
     select,
     update,
@@ -163,61 +166,101 @@ def _source_id(conn, path: str, sha256: str, text: str) -> int:
     return conn.execute(insert(source_files).values(path=path, sha256=sha256, text=text)).inserted_primary_key[0]
 
 
-def _batches(rows: Iterable[dict], size: int) -> Iterator[list[dict]]:
-    iterator = iter(rows)
-    while batch := list(islice(iterator, size)):
-        yield batch
-
-
 def record_variation(engine: Engine, *, source_path: str, source_sha256: str, source_text: str,
                      options: Mapping[str, object], output_dir: str | None,
                      records: Iterable[VariantRecord], skipped: int = 0) -> int:
     """Record one variation run and its variants (streamed from ``records``); returns the run id.
 
-    Idempotent: a variant whose ``.sce`` text is already stored (same content hash) is updated (its
-    run, file path) instead of inserted again. Rows of earlier runs that pointed into ``output_dir``
-    lose their ``file_path``, since their files were replaced by this run. Everything happens in one
-    transaction: a failure leaves the store as it was.
+    A :class:`VariationRecorder` fed from ``records`` in batches of :data:`BATCH_SIZE` and finished as
+    a complete run.
     """
-    ensure_schema(engine, TABLES)
+    recorder = VariationRecorder(engine, source_path=source_path, source_sha256=source_sha256,
+                                 source_text=source_text, options=options, output_dir=output_dir, skipped=skipped)
+    iterator = iter(records)
+    while batch := list(islice(iterator, BATCH_SIZE)):
+        recorder.add(batch)
+    return recorder.finish(complete=True)
+
+
+class VariationRecorder:
+    """Records one variation run batch by batch, each batch committed on its own.
+
+    The ``source_files`` and ``variation_runs`` rows are committed when the recorder is made, then
+    every :meth:`add` commits its rows. ``scenario_variation`` commits a batch *before* writing its
+    files, so a run stopped at any point (Ctrl-C, SIGTERM, a full disk) leaves a row for every
+    ``.sce`` it wrote. Idempotent: a variant whose ``.sce`` text is already stored (same content hash)
+    is updated (its run, file path) instead of inserted again. :meth:`finish` stores the count; for a
+    complete run it also takes the ``file_path`` away from rows of earlier runs in ``output_dir``
+    (their files were replaced). Raises :class:`StoreError` when the store cannot be written.
+    """
+
+    def __init__(self, engine: Engine, *, source_path: str, source_sha256: str, source_text: str,
+                 options: Mapping[str, object], output_dir: str | None, skipped: int = 0) -> None:
+        ensure_schema(engine, TABLES)
+        self.engine, self.output_dir, self.count = engine, output_dir, 0
+        with _transaction(self.engine) as conn:
+            self.source_id = _source_id(conn, source_path, source_sha256, source_text)
+            self.run_id = conn.execute(insert(variation_runs).values(
+                created_at=datetime.now(timezone.utc), options=json.dumps(dict(options), default=str),
+                source_id=self.source_id, output_dir=output_dir, skipped_count=skipped,
+                variant_count=0)).inserted_primary_key[0]
+            # Rows of earlier runs in this folder lose their file path batch by batch as their files are
+            # overwritten, so an interrupted run leaves every path naming the variant now in the file.
+            self._earlier = output_dir is not None and conn.execute(select(variants.c.id).where(and_(
+                variants.c.output_dir == output_dir, variants.c.file_path.is_not(None))).limit(1)).first() is not None
+        self._upsert = _upsert(engine, variants, ["content_hash"], ["run_id", "file_path", "output_dir", "idx"])
+
+    def add(self, records: list[VariantRecord]) -> None:
+        """Insert (or update) the rows of ``records`` and commit them."""
+        if not records:
+            return
+        source_id, run_id, output_dir = self.source_id, self.run_id, self.output_dir
+        batch = [{
+            "source_id": source_id, "run_id": run_id, "scenario": record.scenario, "idx": record.index,
+            "assignment": record.assignment if isinstance(record.assignment, str)
+            else assignment_json(record.assignment),
+            "sce_text": record.sce_text, "content_hash": record.content_hash or content_hash(record.sce_text),
+            "file_path": record.file_path, "output_dir": output_dir,
+        } for record in records]
+        with _transaction(self.engine) as conn:
+            if self._earlier:
+                paths = [{"path": row["file_path"]} for row in batch if row["file_path"] is not None]
+                if paths:
+                    conn.execute(update(variants).where(and_(
+                        variants.c.file_path == bindparam("path"), variants.c.run_id != run_id)).values(
+                        file_path=None), paths)
+            fast = _sqlite_executemany(conn, self._upsert) if self.engine.dialect.name == "sqlite" else None
+            if fast is not None:
+                fast(batch)
+            elif self._upsert is not None:
+                conn.execute(self._upsert, batch)
+            else:  # pragma: no cover - neither SQLite nor PostgreSQL
+                _portable_upsert(conn, batch)
+            self.count += len(batch)
+            conn.execute(update(variation_runs).where(variation_runs.c.id == run_id).values(
+                variant_count=self.count))
+
+    def finish(self, complete: bool = True) -> int:
+        """Store the final count (and, for a ``complete`` run, release earlier paths); returns the run id."""
+        with _transaction(self.engine) as conn:
+            if complete and self.output_dir is not None:
+                conn.execute(update(variants).where(and_(
+                    variants.c.output_dir == self.output_dir, variants.c.run_id != self.run_id)).values(
+                    file_path=None))
+            conn.execute(update(variation_runs).where(variation_runs.c.id == self.run_id).values(
+                variant_count=self.count))
+        return self.run_id
+
+
+@contextmanager
+def _transaction(engine: Engine) -> Iterator:
+    """``engine.begin()`` whose database errors become :class:`StoreError`."""
     try:
         with engine.begin() as conn:
-            source_id = _source_id(conn, source_path, source_sha256, source_text)
-            run_id = conn.execute(insert(variation_runs).values(
-                created_at=datetime.now(timezone.utc), options=json.dumps(dict(options), default=str),
-                source_id=source_id, output_dir=output_dir, skipped_count=skipped)).inserted_primary_key[0]
-            upsert = _upsert(engine, variants, ["content_hash"], ["run_id", "file_path", "output_dir", "idx"])
-
-            def rows() -> Iterator[dict]:
-                for record in records:
-                    yield {
-                        "source_id": source_id, "run_id": run_id, "scenario": record.scenario,
-                        "idx": record.index,
-                        "assignment": record.assignment if isinstance(record.assignment, str)
-                        else assignment_json(record.assignment),
-                        "sce_text": record.sce_text,
-                        "content_hash": record.content_hash or content_hash(record.sce_text),
-                        "file_path": record.file_path, "output_dir": output_dir,
-                    }
-
-            count = 0
-            fast = _sqlite_executemany(conn, upsert) if engine.dialect.name == "sqlite" else None
-            for batch in _batches(rows(), BATCH_SIZE):
-                count += len(batch)
-                if fast is not None:
-                    fast(batch)
-                elif upsert is not None:
-                    conn.execute(upsert, batch)
-                else:  # pragma: no cover - neither SQLite nor PostgreSQL
-                    _portable_upsert(conn, batch)
-            if output_dir is not None:
-                conn.execute(update(variants).where(and_(
-                    variants.c.output_dir == output_dir, variants.c.run_id != run_id)).values(file_path=None))
-            conn.execute(update(variation_runs).where(variation_runs.c.id == run_id).values(variant_count=count))
+            yield conn
     except SQLAlchemyError as exc:
         raise StoreError(f"cannot record variants in {engine.url.render_as_string(hide_password=True)}: "
                          f"{exc}") from exc
-    return run_id
 
 
 _ROW_KEYS = ["source_id", "run_id", "scenario", "idx", "assignment", "sce_text", "content_hash", "file_path",
@@ -342,4 +385,4 @@ def count_rows(engine: Engine) -> dict[str, int]:
 
 
 __all__ = ["TABLES", "StoredVariant", "VariantRecord", "content_hash", "count_rows", "find_variants",
-           "record_variation", "source_files", "variant_for_file", "variants", "variation_runs"]
+           "VariationRecorder", "record_variation", "source_files", "variant_for_file", "variants", "variation_runs"]

@@ -50,7 +50,7 @@ def test_header_comment_per_varied_parameter():
     text = render_sce("main.osc", "0" * 64, ".", "test", 0, {"test.a": 1, "test.b": "s"},
                       {"test.a": "1", "test.b": '"s"'}, OSC)
     lines = text.splitlines()
-    assert lines[0].startswith("# scenario_variation .sce, format 1")
+    assert lines[0].startswith(f"# scenario_variation .sce, format {SCE_FORMAT_VERSION}")
     assert lines[1] == "# test.a = 1"
     assert lines[2] == '# test.b = "s"'
 
@@ -67,14 +67,14 @@ def test_model_lines_keep_their_sce_line_numbers(tmp_path):
 @pytest.mark.parametrize("model", ["  indented first\n\tx\n", "no final newline", "a\r\nb\n", "ctl \x01 x\n",
                                    "snow ☃ man\n", "\n\nblank start\n", "trailing   \n   \n"])
 def test_any_text_survives(model, tmp_path):
-    text = render_sce("m.osc", "0" * 64, ".", "s", 0, {}, {}, model)
+    text = render_sce("m.osc", "0" * 64, ".", "", 0, {}, {}, model)
     assert parse_sce(text, str(tmp_path / "m0.sce")).text.endswith(model.rstrip("\n") + "\n")
 
 
 def test_parameters_document_is_kept(tmp_path):
-    text = render_sce("m.osc", "0" * 64, ".", "s", 0, {}, {}, OSC, parameters={"s": {"v": 2}})
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {}, {}, OSC, parameters={"test": {"v": 2}})
     doc = parse_sce(text, str(tmp_path / "m0.sce"))
-    assert doc.parameters == {"s": {"v": 2}}
+    assert doc.parameters == {"test": {"v": 2}}
     assert doc.assignment == {"parameter_document": 0}
 
 
@@ -94,7 +94,8 @@ def test_size_is_small_for_a_library_import():
 
 
 def test_unknown_version(tmp_path):
-    text = render_sce("m.osc", "0" * 64, ".", "s", 0, {}, {}, OSC).replace("format_version: 1", "format_version: 99")
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {}, {}, OSC).replace(
+        f"format_version: {SCE_FORMAT_VERSION}", "format_version: 99")
     with pytest.raises(SceFormatError, match="unsupported .sce format version 99"):
         read_sce(_write(tmp_path, text))
 
@@ -112,7 +113,7 @@ def test_malformed(tmp_path, text, message):
 
 
 def test_wrong_type(tmp_path):
-    text = render_sce("m.osc", "0" * 64, ".", "s", 0, {}, {}, OSC).replace('scenario: "s"', "scenario: [1]")
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {}, {}, OSC).replace('scenario: "test"', "scenario: [1]")
     with pytest.raises(SceFormatError, match="'scenario' must be a str"):
         read_sce(_write(tmp_path, text))
 
@@ -125,3 +126,36 @@ def test_missing_file(tmp_path):
 def test_relative_source_dir(tmp_path):
     assert relative_source_dir(tmp_path, tmp_path / "out") == ".."
     assert relative_source_dir(tmp_path / "a", tmp_path / "b" / "c") == "../../a"
+
+
+def test_scenario_not_in_the_model_is_an_error(tmp_path):
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {}, {}, OSC).replace('scenario: "test"', 'scenario: "nosuch"')
+    with pytest.raises(SceFormatError, match=r"scenario 'nosuch' is not declared in its model \(scenarios there: test\)"
+                       ) as info:
+        read_sce(_write(tmp_path, text))
+    assert info.value.location.line == text.splitlines().index('scenario: "nosuch"') + 1
+
+
+@pytest.mark.parametrize("cut", ["  import osc.helpers\n\n  scenario test:\n", 'source_dir: "."\n', "\n  scenario te"])
+def test_truncated_file_is_reported_as_truncated(tmp_path, cut):
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {"test.log.msg": "x"}, {"test.log.msg": "'x'"}, OSC)
+    assert text.endswith("\n# end of .sce\n")
+    short = text[:text.index(cut) + len(cut)]
+    with pytest.raises(SceFormatError, match="truncated .sce file") as info:
+        read_sce(_write(tmp_path, short))
+    assert info.value.location.line == short.rstrip("\n").count("\n") + 1
+
+
+def test_version_1_without_end_line_is_still_read(tmp_path):
+    text = render_sce("m.osc", "0" * 64, ".", "test", 0, {}, {}, OSC)
+    old = text.replace(f"format {SCE_FORMAT_VERSION}:", "format 1:").replace(
+        f"format_version: {SCE_FORMAT_VERSION}", "format_version: 1").replace("# end of .sce\n", "")
+    doc = read_sce(_write(tmp_path, old))
+    assert doc.format_version == 1 and doc.scenario == "test" and "keep(it.msg == 'x')" in doc.text
+
+
+def test_source_sha256_is_provenance_only(tmp_path):
+    """A later change of the .osc (another SHA-256) does not change what the .sce runs: it has its own model."""
+    text = render_sce("m.osc", "f" * 64, ".", "test", 0, {}, {}, OSC)
+    doc = read_sce(_write(tmp_path, text))
+    assert doc.source_sha256 == "f" * 64 and doc.text.lstrip("\n") == OSC

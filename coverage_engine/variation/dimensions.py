@@ -7,8 +7,8 @@ A dimension is one such constraint in a scenario:
 * ``keep(<param> in [...])`` among a scenario's members, and ``keep(it[.<member>] in [...])`` in the
   ``with:`` block of a scenario parameter (``param1: test_struct with: keep(it.member2 in [...])``).
 
-Only a literal list (``ListExpr``) on the right makes a dimension; ranges (``[1..5]``) and other
-``in`` constraints are left to the resolver. The finder reads the syntax tree and never resolves;
+Only a literal list (``ListExpr``) of at least one value makes a dimension; any other ``in`` there
+(a range ``[1..5]``, an empty list, a string or a name on the right) is an error at its position. The finder reads the syntax tree and never resolves;
 each value keeps its exact source text (cut by :class:`~coverage_engine.syntax.Location` offsets), so
 a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
 
@@ -132,11 +132,11 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
     starting with ``it`` names scenario members.
     """
     expr = keep.expression
-    if not (isinstance(expr, s.BinaryOp) and expr.op == "in" and isinstance(expr.right, s.ListExpr)):
+    if not (isinstance(expr, s.BinaryOp) and expr.op == "in"):
         return None
+    _check_in(expr)
     parts = _path(expr.left)
-    if parts is None or not expr.right.items:
-        return None
+    assert parts is not None  # checked by _check_in
     path = owner + parts[1:] if parts[0] == "it" else parts
     if parts[0] == "it" and owner_target is not None:
         target: tuple = (*owner_target, tuple(parts[1:]))
@@ -149,6 +149,25 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
     return Dimension(key=".".join([scenario, *path]), scenario=scenario, target=target,
                      left=one_line(_cut(text, expr.left.location)), choices=tuple(choices),
                      start=expr.location.start_pos, end=expr.location.end_pos, location=keep.location)
+
+
+def _check_in(expr: s.BinaryOp) -> None:
+    """Refuse, at its position, an ``in`` that cannot be a dimension (the resolver would only say
+    "expand it with scenario_variation", which is what is being done)."""
+    from coverage_engine.errors import ResolveError, UnsupportedFeatureError
+
+    right = expr.right
+    if isinstance(right, s.RangeExpr):
+        raise UnsupportedFeatureError("ranges are not variation dimensions (list the values: "
+                                      "'in [v1, v2, ...]')", right.location)
+    if not isinstance(right, s.ListExpr):
+        raise UnsupportedFeatureError("the right side of 'in' must be a list of values ('in [v1, v2, ...]')",
+                                      right.location)
+    if not right.items:
+        raise ResolveError("empty value list: a varied parameter needs at least one value", right.location)
+    if _path(expr.left) is None:
+        raise UnsupportedFeatureError("the left side of 'in' must name a parameter ('it.<name>' or '<name>')",
+                                      expr.left.location)
 
 
 def _invocations(node: object) -> Iterator[s.Invocation]:
@@ -206,7 +225,23 @@ def find_dimensions(unit: s.CompilationUnit, text: str | None = None) -> list[Di
             found.extend(_scenario_dimensions(decl, text))
     found.sort(key=lambda d: d.start)
     _check_disjoint(found)
-    return found
+    return _unique_keys(found)
+
+
+def _unique_keys(dimensions: list[Dimension]) -> list[Dimension]:
+    """Second and later keeps on the same parameter get ``#2``, ``#3`` … after the key.
+
+    They are checked together with the first (one slot), but each keep's value is its own entry in a
+    ``.sce``'s assignment (a YAML mapping, a JSON object: a key may appear only once).
+    """
+    from dataclasses import replace
+
+    seen: Counter = Counter()
+    out = []
+    for dim in dimensions:
+        seen[dim.key] += 1
+        out.append(dim if seen[dim.key] == 1 else replace(dim, key=f"{dim.key}#{seen[dim.key]}"))
+    return out
 
 
 def _check_disjoint(dimensions: list[Dimension]) -> None:

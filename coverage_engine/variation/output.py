@@ -1,7 +1,8 @@
 """Write the ``.sce`` files of a plan: clear an earlier generation, then stream one file per valid variant.
 
-:func:`generate` is a generator: each :class:`Generated` is yielded right after its file is written,
-so the caller can record it (store rows, progress) while the next one is made, and nothing is kept.
+:func:`generate` works in batches: the caller records a batch (store rows, committed) before its
+files are written, so a run stopped at any point leaves a row for every file; nothing is kept per
+variant beyond the current batch.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Container, Iterator
+from collections.abc import Callable, Container
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -93,11 +94,31 @@ def _same_content(path: str, data: bytes) -> bool:
 
 #: From this many combinations on, files are written by a forked helper process (see writer.py).
 BACKGROUND_FROM = 5000
+#: Variants whose store rows are committed together (before their files are written).
+BATCH_SIZE = 2000
 
 
-def generate(plan: VariationPlan, output_dir: str | os.PathLike,
-             existing: Container[str] = ()) -> Iterator[Generated]:
-    """Write every valid combination of ``plan`` to ``output_dir`` and yield each (also skipped ones).
+@dataclass(frozen=True, slots=True)
+class GenerationResult:
+    """What :func:`generate` did: files written (and recorded), combinations skipped, whether it was stopped."""
+
+    written: int
+    skipped: int
+    stopped: bool
+
+
+def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Container[str] = (), *,
+             record: Callable[[list[Generated]], None] | None = None,
+             on_item: Callable[[Generated], None] | None = None,
+             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE) -> GenerationResult:
+    """Write every valid combination of ``plan`` to ``output_dir``, in batches.
+
+    For each batch of up to ``batch_size`` valid variants, ``record(batch)`` is called first (the
+    caller commits their store rows), then their files are written, then ``on_item`` is called for
+    each (skipped combinations go to ``on_item`` as they come). So at any moment every file written
+    has been recorded. ``stop()`` is asked before each combination; when it says yes, the batch made
+    so far is recorded and written and generation ends (``stopped`` in the result). Nothing is kept
+    per variant beyond the current batch, so memory does not grow with their number.
 
     The folder is created if needed. Files are written as UTF-8 bytes exactly as hashed, so the
     stored content hash always matches the file. A file named in ``existing`` (names of the earlier
@@ -110,24 +131,45 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike,
     prefix = str(folder.resolve() / plan.path.stem)
     fragments = _assignment_fragments(plan)
     sha256 = hashlib.sha256
+    written = skipped = 0
+    stopped = False
+    batch: list[Generated] = []
+    writes: list[tuple[str, bytes]] = []
     with FileWriter(background=plan.total >= BACKGROUND_FROM) as writer:
-        yield from _generate(plan, template, prefix, fragments, existing, writer, sha256)
 
+        def flush() -> None:
+            if record is not None:
+                record(batch)
+            for path, data in writes:
+                writer.write(path, data)
+            if on_item is not None:
+                for item in batch:
+                    on_item(item)
+            batch.clear()
+            writes.clear()
 
-def _generate(plan, template, prefix, fragments, existing, writer, sha256) -> Iterator[Generated]:
-    for index, choices, rejection in plan.combinations():
-        if rejection is not None:
-            yield Generated(index, choices, None, None, None, None, rejection)
-            continue
-        text = template.render(index, choices)
-        data = text.encode("utf-8")
-        path = f"{prefix}{index}{SUFFIX}"
-        if existing and os.path.basename(path) in existing and _same_content(path, data):
-            yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices),
-                            None)
-            continue
-        writer.write(path, data)
-        yield Generated(index, choices, path, text, sha256(data).hexdigest(), _assignment(fragments, choices), None)
+        for index, choices, rejection in plan.combinations():
+            if stop is not None and stop():
+                stopped = True
+                break
+            if rejection is not None:
+                skipped += 1
+                if on_item is not None:
+                    on_item(Generated(index, choices, None, None, None, None, rejection))
+                continue
+            text = template.render(index, choices)
+            data = text.encode("utf-8")
+            path = f"{prefix}{index}{SUFFIX}"
+            batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(),
+                                   _assignment(fragments, choices), None))
+            if not (existing and os.path.basename(path) in existing and _same_content(path, data)):
+                writes.append((path, data))
+            if len(batch) >= batch_size:
+                written += len(batch)
+                flush()
+        written += len(batch)
+        flush()
+    return GenerationResult(written, skipped, stopped)
 
 
 def _assignment(fragments: list[list[str]], choices: tuple[int, ...]) -> str:

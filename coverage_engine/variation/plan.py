@@ -205,6 +205,16 @@ def plan_variation(path: str | Path, documents: list[dict] | None = None, *,
     ``documents`` are the documents of a scenario parameter file (None: no file). Raises
     :class:`OscError` when the file cannot be parsed or does not resolve whatever the values.
     """
+    plan = build_plan(path, documents, text=text)
+    check_plan(plan, resolver)
+    return plan
+
+
+def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: str | None = None) -> VariationPlan:
+    """Parse ``path`` and find its dimensions, without checking any value (``plan.total`` is known).
+
+    :func:`check_plan` must be called before the plan's combinations are used.
+    """
     from coverage_engine.parser import parse_text
 
     path = Path(path)
@@ -216,7 +226,15 @@ def plan_variation(path: str | Path, documents: list[dict] | None = None, *,
         except (OSError, UnicodeDecodeError) as exc:
             raise OscError(f"{path}: cannot read: {exc}") from exc
     unit = parse_text(text, str(path))
-    dimensions = find_dimensions(unit, text)
+    try:
+        dimensions = find_dimensions(unit, text)
+    except OscError as exc:
+        loc = exc.location
+        if exc.source_line is None and loc is not None and loc.file == str(path):
+            lines = text.splitlines()
+            if 1 <= loc.line <= len(lines):
+                exc.source_line = lines[loc.line - 1]
+        raise
     names = scenario_names(unit)
     varied = [d.scenario for d in dimensions]
     scenario = varied[0] if varied else (names[0] if names else "")
@@ -224,8 +242,13 @@ def plan_variation(path: str | Path, documents: list[dict] | None = None, *,
                          documents=None if documents is None else list(documents),
                          template=TextTemplate.build(text, dimensions),
                          slots=_slots(dimensions, documents), scenario=scenario)
-    _check(plan, resolver or default_resolver(path))
+    plan._bad = [set() for _ in plan.slots]
     return plan
+
+
+def check_plan(plan: VariationPlan, resolver: Resolve | None = None) -> None:
+    """Steps 1 and 2 of the module docstring (raises :class:`OscError` if no value makes the file resolve)."""
+    _check(plan, resolver or default_resolver(plan.path))
 
 
 def _check(plan: VariationPlan, resolver: Resolve) -> None:
@@ -300,6 +323,22 @@ def _search(slots: list[Slot], reference: list[int], errors: list[dict[int, OscE
     return None
 
 
+def _blamed_dim(plan: VariationPlan, slot: Slot, error: OscError) -> int:
+    """The dimension of ``slot`` whose keep holds the error's line (else its first dimension).
+
+    Several keeps on one parameter share a slot; the value to point at is the one in the keep the
+    resolver complained about.
+    """
+    loc = error.location
+    if loc is not None and loc.file == str(plan.path):
+        for dim in slot.dims:
+            if dim < len(plan.dimensions):
+                where = plan.dimensions[dim].location
+                if where.line <= loc.line <= max(where.end_line, where.line):
+                    return dim
+    return slot.dims[0]
+
+
 def _record(plan: VariationPlan, errors: list[dict[int, OscError]]) -> None:
     plan._bad = [set(e) for e in errors]
     shown = plan.shown()
@@ -309,9 +348,9 @@ def _record(plan: VariationPlan, errors: list[dict[int, OscError]]) -> None:
             choices = slot.choices(option)
             keys = plan.keys
             location = None
-            first = min(choices)
-            if first < len(plan.dimensions):
-                location = plan.dimensions[first].choices[choices[first]].location
+            blamed = _blamed_dim(plan, slot, error)
+            if blamed < len(plan.dimensions):
+                location = plan.dimensions[blamed].choices[choices[blamed]].location
             plan.rejections.append(Rejection(
                 slot=slot, option=option, error=error,
                 shown={keys[d]: shown[d][c] for d, c in sorted(choices.items())},

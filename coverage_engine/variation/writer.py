@@ -7,12 +7,15 @@ large generations a forked child does the ``open``/``write``/``close`` calls whi
 the next texts and fills the store: the two run on different cores.
 
 The parent sends ``(path, bytes)`` records through a pipe in ~1 MB batches. If the child fails (disk
-full, permission), :meth:`FileWriter.close` raises :class:`OSError` with its message.
+full, permission), :meth:`FileWriter.close` raises :class:`OSError` with its message. The child
+ignores SIGINT and SIGTERM: on Ctrl-C the parent stops sending, and the child still writes every
+file it was sent (whose store rows the parent has committed) before it ends.
 """
 
 from __future__ import annotations
 
 import os
+import signal
 import struct
 import sys
 
@@ -49,6 +52,10 @@ class FileWriter:
         sys.stderr.flush()
         pid = os.fork()
         if pid == 0:  # pragma: no cover - runs in the child (coverage does not follow forks)
+            # Ctrl-C reaches the whole process group: the parent decides when to stop, and the child
+            # writes every file it was given before it ends (the parent closes the pipe).
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
             os.close(self._pipe)
             os.close(error_read)
             code = 0
@@ -106,8 +113,14 @@ class FileWriter:
     def __enter__(self) -> FileWriter:
         return self
 
-    def __exit__(self, *exc_info) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, traceback) -> None:
+        if exc_type is None:
+            self.close()
+            return
+        try:  # an error is on its way already: wait for the child, but do not hide that error
+            self.close()
+        except OSError:
+            pass
 
 
 def _serve(fd: int) -> None:  # pragma: no cover - runs in the child

@@ -85,7 +85,7 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
                  override: OverrideHook | None, outer: Scope | None) -> TypedExpr:
     type_scope = Scope(ctx) if outer is None else outer.child()
     all_keeps = [extract_keep(k, type_scope) for k in ctype.keeps] + list(keeps)
-    direct: dict[str, KeepValue] = {}
+    direct: dict[str, list[KeepValue]] = {}
     nested: dict[str, list[KeepValue]] = {}
     for keep in all_keeps:
         if not keep.path:
@@ -95,9 +95,7 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
         if head not in ctype.fields and head not in ctype.variables:
             raise NameLookupError(f"'{ctype.name}' has no member '{head}'", keep.location)
         if len(keep.path) == 1:
-            if keep.is_default and head in direct:
-                continue
-            direct[head] = keep
+            direct.setdefault(head, []).append(keep)
         else:
             nested.setdefault(head, []).append(
                 KeepValue(keep.path[1:], keep.value, keep.scope, keep.location, keep.is_default))
@@ -108,10 +106,8 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
         value = given.get(name)
         if value is not None:
             value = coerce(value, fdecl.type, fdecl.location, f"member '{name}'")
-        elif name in direct:
-            keep = direct[name]
-            value = coerce(resolve_expression(keep.value, keep.scope, fdecl.type), fdecl.type, keep.location,
-                           f"keep of '{name}'")
+        if name in direct:
+            value = _kept_value(ctype, name, fdecl.type, value, direct[name])
         if value is None:
             value = field_value(ctx, fdecl.type, fdecl.default, fdecl.with_members, member_scope, key,
                                 fdecl.location, f"member '{name}'")
@@ -128,9 +124,7 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
             raise UnsupportedFeatureError(f"not supported: 'keep' on members of variable '{name}'",
                                           nested[name][0].location)
         if name in direct:  # a keep on a variable sets its initial value
-            keep = direct[name]
-            initial = coerce(resolve_expression(keep.value, keep.scope, vdecl.type), vdecl.type, keep.location,
-                             f"keep of variable '{name}'")
+            initial = _kept_value(ctype, name, vdecl.type, None, direct[name])
         else:
             initial = field_value(ctx, vdecl.type, vdecl.initial, (), member_scope, key, vdecl.location,
                                   f"variable '{name}'")
@@ -138,6 +132,32 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
         ctx.variables.append(variable)
         values[name] = TypedExpr(model.VariableRef(variable), vdecl.type, False)
     return struct_value(ctype, values)
+
+
+def _kept_value(ctype: CompoundType, name: str, mtype: OscType, given: TypedExpr | None,
+                keeps: list[KeepValue]) -> TypedExpr | None:
+    """The value the keeps on member ``name`` fix, checked against a given value and each other.
+
+    A hard ``keep(it.x == v)`` is a constraint, not a default: two that fix different constants (or
+    one that disagrees with a constructor argument) are an error. ``keep(default …)`` only applies
+    when nothing else gives a value; the last one written wins.
+    """
+    hard = [k for k in keeps if not k.is_default]
+    chosen = given
+    for keep in hard:
+        value = coerce(resolve_expression(keep.value, keep.scope, mtype), mtype, keep.location, f"keep of '{name}'")
+        if chosen is not None and chosen.is_const and value.is_const and chosen.value != value.value:
+            raise ResolveError(f"contradicting constraints on '{ctype.name}.{name}': {chosen.value!r} and "
+                               f"{value.value!r}", keep.location)
+        if chosen is None:
+            chosen = value
+    if chosen is None:
+        soft = [k for k in keeps if k.is_default]
+        if soft:
+            keep = soft[-1]
+            chosen = coerce(resolve_expression(keep.value, keep.scope, mtype), mtype, keep.location,
+                            f"keep of '{name}'")
+    return chosen
 
 
 def struct_value(ctype: CompoundType, values: dict[str, TypedExpr]) -> TypedExpr:

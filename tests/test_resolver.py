@@ -348,3 +348,28 @@ def test_constructor_argument_errors_point_at_the_argument(tmp_path):
         """)
     assert info.value.location.file.endswith("s.osc")
     assert (info.value.location.line, info.value.location.column) == (5, 34)
+
+
+def test_contradicting_keeps_are_an_error_and_default_keeps_yield(tmp_path):
+    with pytest.raises(OscError, match="contradicting constraints on 'p.a': 5 and 4") as info:
+        load(tmp_path, """
+        struct p:
+            a: int = 1
+            keep(it.a == 5)
+        scenario sc:
+            q: p with:
+                keep(it.a == 4)
+            do log(q.a)
+        """)
+    assert info.value.location.line == 8
+    sf = load(tmp_path, """
+        struct p:
+            a: int = 1
+            keep(default it.a == 5)
+        scenario sc:
+            q: p with:
+                keep(it.a == 4)
+            r: p
+            do log(q.a)
+        """)
+    assert sf.scenarios[0].parameter_values() == {"q": {"a": 4}, "r": {"a": 5}}

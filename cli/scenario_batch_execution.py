@@ -8,18 +8,20 @@ become one line on stderr and an exit code (a traceback only with ``-d/--debug``
 
 The first argument selects a subcommand only when it is exactly ``worker``, ``status`` or ``report``,
 so the seed command line works unchanged. Exit codes: 0 every job passed · 1 a job did not pass, or
-an error · 2 usage error · 130/143 interrupted by SIGINT/SIGTERM.
+a runtime error (files, store, report) · 2 the command line is malformed (click.UsageError and
+:class:`BatchUsageError`) · 130/143 interrupted by SIGINT/SIGTERM.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import traceback
 
 import click
 
-from executor.batch.errors import BatchError
+from executor.batch.errors import BatchError, BatchUsageError
 from store.database import StoreError
 
 PROG = "scenario_batch_execution"
@@ -44,6 +46,61 @@ class JobsType(click.ParamType):
         if number < 1:
             self.fail(f"{number} must be at least 1", param, ctx)
         return number
+
+
+class SecondsType(click.ParamType):
+    """A finite number of seconds: above 0, and at least ``minimum`` when one is given.
+
+    ``nan`` and ``inf`` are refused: they would silently disable a limit (``nan`` compares false to all).
+    """
+
+    name = "S"
+
+    def __init__(self, minimum: float | None = None) -> None:
+        self.minimum = minimum
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value) and value > 0:
+            return value
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number of seconds", param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number of seconds", param, ctx)
+        if number <= 0:
+            self.fail(f"must be more than 0 s (got {value})", param, ctx)
+        if self.minimum is not None and number < self.minimum:
+            self.fail(f"must be at least {self.minimum:g} s (got {value})", param, ctx)
+        return number
+
+
+class ShardType(click.ParamType):
+    """``--shard i/N``: the i-th of N subsets, 1 <= i <= N."""
+
+    name = "i/N"
+
+    def convert(self, value, param, ctx):
+        from executor.batch.errors import BadShard
+        from executor.batch.inputs import Shard
+
+        if not isinstance(value, str):
+            return value
+        try:
+            return Shard.parse(value)
+        except BadShard as exc:
+            self.fail(str(exc).removeprefix("--shard "), param, ctx)
+
+
+def _check_command(command) -> None:
+    """The launch command's form (not empty, both placeholders) is checked before anything is touched."""
+    from executor.batch.errors import BadCommand
+    from executor.batch.inputs import check_command
+
+    try:
+        check_command(command, require_executable=False)
+    except BadCommand as exc:
+        raise click.UsageError(str(exc)) from exc
 
 
 def _store_option(func):
@@ -88,20 +145,20 @@ def _check_post_run(hooks) -> None:
               help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
               help="Jobs run in parallel ('auto': one per CPU).")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S",
+@click.option("--timeout", type=SecondsType(), metavar="S",
               help="Seconds a job may run; then its process group gets SIGTERM, then SIGKILL.")
-@click.option("--grace", type=click.FloatRange(min=0), default=5.0, show_default=True, metavar="S",
+@click.option("--grace", type=SecondsType(), default=5.0, show_default=True, metavar="S",
               help="Seconds between SIGTERM/SIGINT and SIGKILL.")
 @click.option("--retries", type=click.IntRange(min=0), default=0, show_default=True, metavar="K",
               help="Repeat a job up to K times after an infrastructure error (no result, signal, timeout).")
 @click.option("--resume", is_flag=True, help="Finish the latest unfinished batch of this output folder.")
-@click.option("--shard", metavar="i/N", help="Run only the i-th of N subsets (stable hash of file content).")
+@click.option("--shard", type=ShardType(), metavar="i/N", help="Run only the i-th of N subsets (stable hash of file content).")
 @click.option("--halt-on-failure", is_flag=True, help="Start no new job after the first job that did not pass.")
 @click.option("-r", "--ignore-process-return-value", "ignore_rc", is_flag=True,
               help="Judge a job by its test.xml alone.")
 @click.option("--post-run", multiple=True, metavar="CMD", help="Run 'CMD <job output folder>' after each job.")
 @click.option("--enqueue-only", is_flag=True, help="Put the jobs into the (shared) store; 'worker' runs them.")
-@click.option("--lease", type=click.FloatRange(min=0.2), default=60.0, show_default=True, metavar="S",
+@click.option("--lease", type=SecondsType(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat before another worker may take it.")
 @_store_option
 @_debug_option
@@ -113,18 +170,19 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
     """
     from executor.batch import runner
-    from executor.batch.inputs import Shard
     from executor.batch.progress import make_reporter
     from store.jobs import BatchOptions
 
     if not resume and input_dir is None:
         raise click.UsageError("missing -i/--input-dir")
+    if not resume or command:
+        _check_command(command)
     _check_post_run(post_run)
     request = runner.BatchRequest(
         input_dir=input_dir, output_dir=runner.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_rc, halt_on_failure=halt_on_failure, grace=grace),
-        shard=Shard.parse(shard) if shard else None)
+        shard=shard)
     store = _open_store(store_url)
     try:
         if resume:
@@ -154,9 +212,9 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
 @click.option("--batch", "batch_id", type=int, help="Only this batch (default: every shared batch).")
 @click.option("-o", "--output-root", type=click.Path(file_okay=False),
               help="Put job folders here instead of the batch's output folder.")
-@click.option("--lease", type=click.FloatRange(min=0.2), default=60.0, show_default=True, metavar="S",
+@click.option("--lease", type=SecondsType(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat.")
-@click.option("--poll", type=click.FloatRange(min=0.01), default=1.0, show_default=True, metavar="S",
+@click.option("--poll", type=SecondsType(0.01), default=1.0, show_default=True, metavar="S",
               help="Seconds between looks at an empty queue.")
 @click.option("--wait", "wait_for_work", is_flag=True, help="Keep waiting for new batches (a long-lived pod).")
 @_debug_option
@@ -255,6 +313,8 @@ def main(argv: list[str] | None = None) -> None:
         code = 130
     except click.UsageError as exc:
         code = _fail(exc.format_message(), EXIT_USAGE)
+    except BatchUsageError as exc:
+        code = _fail(str(exc), EXIT_USAGE)
     except click.ClickException as exc:
         code = _fail(exc.format_message(), exc.exit_code)
     except (BatchError, StoreError) as exc:

@@ -42,8 +42,9 @@ def die_with(parent: int):
     So a kill -9 of a worker does not leave its children running (their grandchildren are ended by
     the next sweep on this host, which knows the process groups from the store). If the parent died
     between fork and this call the signal would never come, so the child checks and ends itself.
-    It costs a real fork instead of vfork (about 2-3 ms per child), so the single-host run leaves it
-    off and relies on ``--resume`` ending the orphaned process groups it finds in the store.
+    It costs a real fork instead of vfork (measured 4-6 ms per child: 1.12-1.15x a shell loop in
+    ``benchmarks/bench_batch_overhead.py``, over its 1.1x goal), so the single-host run leaves it off
+    and relies on ``--resume`` ending the orphaned process groups it finds in the store.
     """
     if _PRCTL is None:
         return None

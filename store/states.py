@@ -56,10 +56,13 @@ TRANSITIONS: dict[Transition, tuple[frozenset[JobState], frozenset[JobState]]] =
     Transition.RESUME: (frozenset({JobState.CANCELLED}), frozenset({JobState.QUEUED})),
 }
 
-#: Verdicts worth another attempt when ``--retries`` allows: the scenario did not get to report a result.
 #: The reason recorded on jobs a halt cancelled before they started (the merged report shows them as skipped).
 HALT_REASON = "not started: --halt-on-failure after a failed job"
 
+#: The reason recorded on a claimed job whose command a cancel (Ctrl-C, SIGTERM) kept from starting.
+NOT_STARTED_REASON = "cancelled before it started"
+
+#: Verdicts worth another attempt when ``--retries`` allows: the scenario did not get to report a result.
 RETRYABLE = frozenset({JobState.ERROR, JobState.TIMEOUT})
 
 

@@ -85,6 +85,71 @@ def test_user_errors_are_one_line_without_traceback(tmp_path):
     assert not (tmp_path / "ledger.txt").exists()        # nothing ran
 
 
+def test_exit_codes_usage_2_runtime_1(tmp_path):
+    """A malformed command line exits 2 (docs/batch.md); what depends on files, PATH or the store exits 1."""
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a": ""})
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "afile").write_text("")
+    cmd = child_command(child)
+    usage = [
+        ["-i", "in", "-o", "r", "--", sys.executable, str(child), "{SCENARIO}"],          # no {OUTPUT_DIR}
+        ["-i", "in", "-o", "r", "--", sys.executable, str(child), "{OUTPUT_DIR}"],        # no {SCENARIO}
+        ["-i", "in", "-o", "r"],                                                          # no command
+        ["-i", "in", "-o", "r", "--"],
+        ["-o", "r", "--", *cmd],                                                          # no -i
+        ["-i", "in", "-o", "r", "--shard", "0/3", "--", *cmd],
+        ["-i", "in", "-o", "r", "--shard", "x", "--", *cmd],
+        ["-i", "in", "-o", "r", "-j", "0", "--", *cmd],
+        ["-i", "in", "-o", "r", "--bogus", "--", *cmd],
+        ["-i", "in", "-o", "r", "--post-run", "", "--", *cmd],
+        ["-o", "r", "--resume", "--", "true", "no-placeholders"],
+    ]
+    for option in ("--timeout", "--grace", "--lease"):
+        for value in ("nan", "inf", "-inf", "0", "-1", "soon"):
+            usage.append(["-i", "in", "-o", "r", option, value, "--", *cmd])
+    for option in ("--lease", "--poll"):
+        for value in ("nan", "inf", "0"):
+            usage.append(["worker", option, value])
+    runtime = [
+        ["-i", "empty", "-o", "r", "--", *cmd],                                           # no scenario files
+        ["-i", "missing", "-o", "r", "--", *cmd],
+        ["-i", "in", "-o", "r", "--", "no-such-program-xyz", "{SCENARIO}", "{OUTPUT_DIR}"],
+        ["-i", "in", "-o", "afile/r", "--", *cmd],
+        ["-o", "nothing_here", "--resume"],
+    ]
+    for args, code in [(a, 2) for a in usage] + [(a, 1) for a in runtime]:
+        result = run_cli(args, tmp_path)
+        assert result.returncode == code, (args, result.returncode, result.stderr)
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and "error" in lines[0] and "Traceback" not in lines[0], (args, result.stderr)
+    assert not (tmp_path / "ledger.txt").exists()        # nothing ran
+    assert "afile is not a folder" in run_cli(runtime[3], tmp_path).stderr
+
+
+def test_non_finite_timeout_is_refused_not_applied(tmp_path):
+    result = _batch(tmp_path, {"a": ""}, "--timeout", "nan")
+    assert result.returncode == 2
+    assert "--timeout" in result.stderr and "finite" in result.stderr
+    assert "timed out" not in result.stdout and not (tmp_path / "results" / "test.xml").exists()
+
+
+def test_report_into_a_path_under_a_file_says_so(tmp_path):
+    env = cli_env(tmp_path)
+    assert _batch(tmp_path, {"a": ""}, env=env).returncode == 0
+    (tmp_path / "afile").write_text("keep me")
+    store = f"sqlite:///{tmp_path / '.scenario_store.db'}"
+    result = run_cli(["report", "--store", store, "-o", "afile/x.xml"], tmp_path, env)
+    assert result.returncode == 1
+    assert result.stderr.strip() == f"scenario_batch_execution: error: cannot write the report: " \
+                                    f"{tmp_path / 'afile'} is not a folder"
+    assert (tmp_path / "afile").read_text() == "keep me"
+    nested = run_cli(["report", "--store", store, "-o", "afile/deeper/x.xml"], tmp_path, env)
+    assert nested.returncode == 1 and "afile is not a folder" in nested.stderr
+    fine = run_cli(["report", "--store", store, "-o", "new/dir/x.xml"], tmp_path, env)
+    assert fine.returncode == 0 and (tmp_path / "new/dir/x.xml").exists()
+
+
 def test_missing_garbage_empty_xml_and_big_output(tmp_path):
     result = _batch(tmp_path, {"big": "output_mb=50", "garbage": "xml=garbage", "empty": "xml=empty",
                                "none": "xml=none", "two": "xml=two"}, "-j", "3")

@@ -81,7 +81,7 @@ def test_ctrl_c_cancels_writes_partial_report_and_resume_completes(tmp_path):
     cancelled = [j.name for j in jobs if j.status is JobState.CANCELLED]
     assert cancelled, "the running jobs are marked cancelled"
     assert not any(j.status is JobState.RUNNING for j in jobs)
-    assert _suite_names(tmp_path / "results" / "test.xml") == finished
+    assert _suite_names(tmp_path / "results" / "test.xml") == names          # the unfinished ones count too
 
     resumed = run_cli(["-o", "results", "--resume", "-j", "2", "--", *child_command(child)], tmp_path, env)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
@@ -99,6 +99,60 @@ def test_ctrl_c_cancels_writes_partial_report_and_resume_completes(tmp_path):
                 assert (tmp_path / "results" / job.name / "log.1.txt").exists()
     finally:
         store.close()
+
+
+def _cases(path: Path) -> dict[str, tuple[str, str | None, str | None]]:
+    """Per suite (job): its testcase's outcome (passed, error, failure, skipped), type and message."""
+    out = {}
+    for suite in ET.parse(path).getroot().iter("testsuite"):
+        for case in suite.iter("testcase"):
+            problem = next((e for e in case if e.tag in ("error", "failure", "skipped")), None)
+            if problem is None:
+                out[suite.get("name")] = ("passed", None, None)
+            else:
+                out[suite.get("name")] = (problem.tag, problem.get("type"), problem.get("message"))
+    return out
+
+
+def test_report_written_at_ctrl_c_counts_every_job_and_resume_replaces_it(tmp_path):
+    names = [f"s{i}" for i in range(6)]
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {n: "sleep=1.5" for n in names})
+    env = cli_env(tmp_path)
+    proc = start_cli(["-i", "in", "-o", "results", "--grace", "1", "--", *child_command(child)], tmp_path, env)
+    _wait_for_ledger(tmp_path, 1, proc)                           # s0 finished, s1 is starting
+    log = tmp_path / "results" / "s1" / "log.txt"
+    deadline = time.monotonic() + 20
+    while not (log.exists() and "start s1" in log.read_text()):
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 130, out
+
+    report = tmp_path / "results" / "test.xml"
+    root = ET.parse(report).getroot()
+    # a CI reading only the XML must not see a clean pass: the whole batch is counted
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("6", "0", "1")
+    assert sum(int(s.get("skipped")) for s in root.iter("testsuite")) == 4
+    cases = _cases(report)
+    assert list(cases) == names
+    assert cases["s0"][0] == "passed"
+    assert cases["s1"] == ("error", "cancelled", "interrupted (Ctrl-C); run again with --resume")
+    for name in names[2:]:
+        assert cases[name] == ("skipped", "skipped", "not run: the batch was interrupted; --resume runs it")
+    numbers = [line.split("]")[0] + "]" for line in out.splitlines() if line.startswith("[")]
+    assert numbers == ["[1/6]", "[2/6]"], out                     # the cancelled job has its own number
+
+    resumed = run_cli(["-o", "results", "--resume"], tmp_path, env)
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    root = ET.parse(report).getroot()
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("6", "0", "0")
+    assert sum(int(s.get("skipped")) for s in root.iter("testsuite")) == 0
+    assert all(outcome == "passed" for outcome, _, _ in _cases(report).values())
+    assert [line.split("]")[0] + "]" for line in resumed.stdout.splitlines() if line.startswith("[")] == \
+        ["[2/6]", "[3/6]", "[4/6]", "[5/6]", "[6/6]"]
+    assert ledger(tmp_path) == {n: 1 for n in names}
 
 
 def test_resume_of_a_finished_batch_rewrites_the_report(tmp_path):

@@ -14,11 +14,19 @@ class NoScenarios(BatchError):
     """The input folder holds no .sce or .osc file."""
 
 
-class BadCommand(BatchError):
+class BatchUsageError(BatchError):
+    """The command line asks for something malformed (``cli/`` exits 2, as for a bad option)."""
+
+
+class BadCommand(BatchUsageError):
     """The launch command is missing, or lacks the {SCENARIO} or {OUTPUT_DIR} placeholder."""
 
 
-class BadShard(BatchError):
+class CommandNotFound(BatchError):
+    """The launch command's program is not found on PATH."""
+
+
+class BadShard(BatchUsageError):
     """--shard must be i/N with 1 <= i <= N."""
 
 

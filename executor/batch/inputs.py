@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from executor.batch.errors import BadCommand, BadShard, NoScenarios
+from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScenarios
 from store.jobs import JobSpec
 
 SCENARIO = "{SCENARIO}"
@@ -99,7 +99,7 @@ def check_command(command: Sequence[str], *, require_executable: bool = True) ->
     program = command[0]
     if require_executable and SCENARIO not in program and OUTPUT_DIR not in program:
         if shutil.which(program) is None:
-            raise BadCommand(f"launch command not found: {program}")
+            raise CommandNotFound(f"launch command not found: {program}")
     return tuple(command)
 
 

@@ -19,7 +19,7 @@ from executor.batch.verdict import LOG_FILE, RESULT_FILE, FileMark, judge, launc
 from executor.hooks import run_post_hooks
 from executor.process import ChildProcess
 from store.jobs import Batch, Job, JobResult
-from store.states import JobState
+from store.states import NOT_STARTED_REASON, JobState
 
 
 @dataclass
@@ -126,7 +126,7 @@ class JobRun:
         with self._lock:
             if self._cancel_grace is not None:
                 now = time.time()
-                return JobResult(JobState.CANCELLED, None, now, now, reason="cancelled before it started",
+                return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
                                  output_dir=str(self.output_dir))
             pid = child.start()
             self._child = child

@@ -5,7 +5,10 @@ testcase has it named after the job (so the variants of one scenario stay apart 
 name kept in the suite's ``testcase`` property; several testcases keep their names. A job without a
 readable report becomes one testcase with an ``error`` carrying the exit code and the end of its log;
 a timeout is an error of type ``timeout``. A job that ``--halt-on-failure`` kept from starting is one
-skipped testcase, so CI's test count never shrinks. Totals are computed by junit-xml from the testcases.
+skipped testcase, so CI's test count never shrinks. The report written when Ctrl-C (or SIGTERM) stopped
+the batch also counts the jobs it stopped (an error of type ``cancelled``) and those it kept from
+starting (skipped), so an interrupted batch never looks like a clean pass. Totals are computed by
+junit-xml from the testcases.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from junit_xml import TestCase, TestSuite, to_xml_report_string
 
 from executor.batch.junit_read import CaseRecord, JunitUnreadable, has_problem, read_cases
 from store.jobs import Job
-from store.states import FINAL, HALT_REASON, JobState
+from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
 
 #: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
 REPORT_LOG_CHARS = 16 * 1024
@@ -49,14 +52,32 @@ def halted(job: Job) -> bool:
     return job.status is JobState.CANCELLED and job.reason == HALT_REASON
 
 
+#: The skipped message of a job an interruption kept from starting.
+NOT_RUN_MESSAGE = "not run: the batch was interrupted; --resume runs it"
+
+#: The error type of a job an interruption stopped while it ran.
+CANCELLED_TYPE = "cancelled"
+
+
+def interrupted_message(how: str) -> str:
+    """The error message of a job stopped by an interruption (``how``: ``Ctrl-C``, ``SIGTERM``)."""
+    return f"interrupted ({how}); run again with --resume"
+
+
+def _not_started(job: Job) -> bool:
+    """Whether an unfinished job never started its command (queued, or cancelled before it began)."""
+    return job.status is JobState.QUEUED or (job.status is JobState.CANCELLED and job.reason == NOT_STARTED_REASON)
+
+
 def _tail(text: str | None) -> str | None:
     if not text:
         return None
     return text[-REPORT_LOG_CHARS:]
 
 
-def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestSuite:
-    """The testsuite of one finished job."""
+def job_suite(job: Job, assignment: Mapping[str, object] | None = None,
+              interrupted: str | None = None) -> TestSuite:
+    """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped."""
     cases: list[CaseRecord] = []
     if job.junit_xml:
         try:
@@ -88,6 +109,15 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestS
         case = TestCase(job.name, classname=job.name, elapsed_sec=None)
         case.add_skipped_info(message=HALTED_MESSAGE)
         test_cases.append(case)
+    elif interrupted is not None and job.status not in FINAL:
+        case = TestCase(job.name, classname=job.name, elapsed_sec=None)
+        if _not_started(job):
+            case.add_skipped_info(message=NOT_RUN_MESSAGE)
+        else:
+            case.elapsed_sec = job.duration
+            case.add_error_info(message=interrupted_message(interrupted), output=_tail(job.log_tail),
+                                error_type=CANCELLED_TYPE)
+        test_cases.append(case)
     elif not cases:
         case = TestCase(job.name, classname=job.name, elapsed_sec=job.duration)
         if job.status is JobState.PASSED:
@@ -118,18 +148,21 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None) -> TestS
                      file=job.scenario_path)
 
 
-def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, object]] | None = None) -> str:
+def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, object]] | None = None,
+                  *, interrupted: str | None = None) -> str:
     """The merged JUnit XML of the jobs that have a verdict, and of those a halt kept from running (as skipped).
 
-    Queued, running and interrupted (Ctrl-C) jobs are left out: ``--resume`` runs them.
+    Without ``interrupted`` queued, running and cancelled jobs are left out (a report of a batch still in
+    progress). With it (``Ctrl-C``, ``SIGTERM``: the report written when that stopped the batch) every job
+    is in: one stopped while it ran is an error of type ``cancelled``, one not started is skipped.
     """
     assignments = assignments or {}
     suites = []
     size = 0
     for job in jobs:
-        if job.status not in FINAL and not halted(job):
+        if job.status not in FINAL and not halted(job) and interrupted is None:
             continue
-        suites.append(job_suite(job, assignments.get(job.scenario_path)))
+        suites.append(job_suite(job, assignments.get(job.scenario_path), interrupted))
         size += len(job.junit_xml or "") + min(len(job.log_tail or ""), REPORT_LOG_CHARS)
     return to_xml_report_string(suites, prettyprint=size < _PRETTY_LIMIT)
 

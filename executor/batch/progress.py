@@ -1,7 +1,8 @@
 """What people see while a batch runs: a rich progress display on a terminal, plain lines otherwise.
 
 The worker loop calls a :class:`Reporter`; it never prints itself. Plain output is one line per
-finished job (``[3/10] passed  a_ok  0.52 s``), used when stdout is not a terminal, when ``NO_COLOR``
+finished job (``[3/10] passed  a_ok  0.52 s``; every job that ends gets the next number, a cancelled one
+too, so after Ctrl-C the numbers still count the jobs that ended; a retry line has none), used when stdout is not a terminal, when ``NO_COLOR``
 is set, or with ``-j 1`` (where the child's own output is shown live instead of a progress bar).
 """
 
@@ -54,9 +55,12 @@ class PlainReporter(Reporter):
         self.total, self.done = total, done
 
     def job_finished(self, job: Job, result: JobResult, *, retrying: bool = False) -> None:
-        if not retrying and result.status is not JobState.CANCELLED:
+        """Number the job that reached an end here (a verdict, or cancelled); a retry line has no number."""
+        prefix = f"[{self.done + 1}/{self.total}] " if self.total else f"[{self.done + 1}] "
+        if retrying:
+            prefix = " " * len(prefix)
+        else:
             self.done += 1
-        prefix = f"[{self.done}/{self.total}] " if self.total else f"[{self.done}] "
         print(_line(prefix, job, result, retrying), file=self.stream, flush=True)
 
     def warn(self, text: str) -> None:

@@ -32,6 +32,9 @@ REPORT_FILE = "test.xml"
 #: Exit codes of an interrupted run: 128 + the signal number, as shells report it.
 EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
+#: How the report of an interrupted run names the interruption.
+INTERRUPTION_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
+
 
 @dataclass(frozen=True)
 class BatchRequest:
@@ -47,7 +50,15 @@ class BatchRequest:
 def output_folder(path: str) -> str:
     """The absolute output folder (created with its parents), the key under which a batch is resumed."""
     folder = Path(path).expanduser().resolve()
-    folder.mkdir(parents=True, exist_ok=True)
+    for place in (folder, *folder.parents):
+        if place.exists():
+            if not place.is_dir():
+                raise BatchError(f"cannot make the output folder {folder}: {place} is not a folder")
+            break
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BatchError(f"cannot make the output folder {folder}: {exc.strerror or exc}") from exc
     return str(folder)
 
 
@@ -156,14 +167,37 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
                               echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd())
     _summary, signum = run_worker(store, settings, reporter, total, done)
-    counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE)
+    interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
+    counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
     return counts, signum
 
 
-def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str]) -> dict[JobState, int]:
-    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts."""
+def check_report_path(path: str | os.PathLike[str]) -> None:
+    """Raise :class:`BatchError` when the report cannot go to ``path`` because a folder on its way is a file."""
+    target = Path(path).absolute()
+    if target.is_dir():
+        raise BatchError(f"cannot write the report: {target} is a folder")
+    for folder in target.parents:
+        if folder.exists():
+            if not folder.is_dir():
+                raise BatchError(f"cannot write the report: {folder} is not a folder")
+            return
+
+
+def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
+                       interrupted: str | None = None) -> dict[JobState, int]:
+    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts.
+
+    ``interrupted`` (``Ctrl-C``, ``SIGTERM``) says the batch was stopped: its unfinished jobs are in the
+    report too, as errors (stopped while running) or skipped (not started).
+    """
+    check_report_path(path)
     assignments = variant_assignments(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
-    write_report(path, merged_report(store.iter_results(batch.id), assignments))
+    xml_text = merged_report(store.iter_results(batch.id), assignments, interrupted=interrupted)
+    try:
+        write_report(path, xml_text)
+    except OSError as exc:
+        raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
     return store.counts(batch.id)
 
 

@@ -93,3 +93,10 @@ def test_entity_expansion_is_refused_and_report_written_atomically(tmp_path):
     write_report(target, text)
     assert _root(target.read_text()).get("errors") == "1"
     assert [p.name for p in target.parent.iterdir()] == ["test.xml"]
+
+
+def test_child_timestamps_are_kept():
+    child = ("<testsuites><testsuite name='x'><testcase classname='c' name='t' time='0.5' "
+             "timestamp='2026-11-22T07:20:00'/></testsuite></testsuites>")
+    root = _root(merged_report([_job("ts", JobState.PASSED, child)]))
+    assert [c.get("timestamp") for c in root.iter("testcase")] == ["2026-11-22T07:20:00"]

@@ -30,7 +30,7 @@ _PRETTY_LIMIT = 8 * 1024 * 1024
 
 def _case(record: CaseRecord, name: str | None = None) -> TestCase:
     case = TestCase(name or record.name, classname=record.classname, elapsed_sec=record.time,
-                    stdout=record.stdout, stderr=record.stderr)
+                    stdout=record.stdout, stderr=record.stderr, timestamp=record.timestamp)
     # junit-xml counts a failure, error or skip only when it has a message or text, so a child's
     # bare <failure/> gets its kind as the message rather than turning into a pass.
     message = record.message or record.type or record.outcome

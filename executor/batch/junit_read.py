@@ -27,6 +27,7 @@ class CaseRecord:
     name: str
     classname: str | None = None
     time: float | None = None
+    timestamp: str | None = None     # as the child wrote it (ISO 8601 from scenario_execution)
     outcome: str = "passed"          # passed | failure | error | skipped
     message: str | None = None
     type: str | None = None
@@ -70,7 +71,7 @@ def read_cases(xml_text: str) -> list[CaseRecord]:
         err = case.find("system-err")
         cases.append(CaseRecord(
             name=case.get("name") or "unnamed", classname=case.get("classname"), time=_float(case.get("time")),
-            outcome=outcome, message=message, type=kind, text=text,
+            timestamp=case.get("timestamp"), outcome=outcome, message=message, type=kind, text=text,
             stdout=None if out is None else out.text, stderr=None if err is None else err.text))
     return cases
 

@@ -88,11 +88,7 @@ class ScenarioRunner:
         period = self.tick_period
         next_tick = time.monotonic()
         while True:
-            root.tick_once()
-            self.ticks += 1
-            for observe in observers:
-                observe(root)
-            if root.status is not Status.RUNNING:
+            if self._tick(root, observers):
                 return root.status
             next_tick += period
             delay = next_tick - time.monotonic()
@@ -100,6 +96,14 @@ class ScenarioRunner:
                 time.sleep(delay)
             else:
                 next_tick = time.monotonic()
+
+    def _tick(self, root, observers) -> bool:
+        """Tick the tree once and show it to the observers; True when the tree has finished."""
+        root.tick_once()
+        self.ticks += 1
+        for observe in observers:
+            observe(root)
+        return root.status is not Status.RUNNING
 
     def _step_loop(self, root, simulation, observers) -> Status:
         """Step-based: one ``step()`` per ``dt``; the tree is ticked whenever a tick can matter.
@@ -124,11 +128,7 @@ class ScenarioRunner:
             advance()
             if now() < wake:
                 continue
-            root.tick_once()
-            self.ticks += 1
-            for observe in observers:
-                observe(root)
-            if root.status is not Status.RUNNING:
+            if self._tick(root, observers):
                 return root.status
             if self.skip_idle_ticks:
                 wake = next_wake(root)

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import os
 import signal
 import sys
 import threading
 import time
 from pathlib import Path
 
-from batch_fixtures import child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
+from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
 
 from executor.hooks import run_post_hooks
 
@@ -41,18 +40,6 @@ def _wait_for(path: Path, proc, timeout: float = 30) -> None:
         time.sleep(0.02)
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as handle:
-            return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
-    except OSError:
-        return False
-
-
 def _start_batch(tmp_path: Path, hook_args: str, grace: str):
     hook, mark = _write_hooks(tmp_path)
     child = write_child(tmp_path)
@@ -72,7 +59,7 @@ def test_ctrl_c_ends_a_running_post_run_hook_and_skips_the_rest(tmp_path):
     out, _ = proc.communicate(timeout=60)
     assert time.monotonic() - began < 10, "the runner waited for the hook"
     assert proc.returncode == 130, out
-    assert not _alive(hook_pid)
+    assert not alive(hook_pid)
     assert not (tmp_path / "results" / "a" / "second_hook_ran").exists()
     assert not (tmp_path / "results" / "b").exists()              # no new job after Ctrl-C
     assert "$ " in (tmp_path / "results" / "a" / "post_run.log").read_text()
@@ -82,13 +69,13 @@ def test_second_ctrl_c_kills_a_hook_that_ignores_sigint(tmp_path):
     proc, hook_pid = _start_batch(tmp_path, "30 ignore-sigint", grace="60")
     proc.send_signal(signal.SIGINT)
     time.sleep(1.0)
-    assert proc.poll() is None and _alive(hook_pid), "the hook ignores SIGINT: the grace period runs"
+    assert proc.poll() is None and alive(hook_pid), "the hook ignores SIGINT: the grace period runs"
     began = time.monotonic()
     proc.send_signal(signal.SIGINT)
     out, _ = proc.communicate(timeout=60)
     assert time.monotonic() - began < 10, "the second Ctrl-C did not end the hook"
     assert proc.returncode == 130, out
-    assert not _alive(hook_pid)
+    assert not alive(hook_pid)
 
 
 def test_hooks_in_order_failures_reported_cancel_skips_the_rest(tmp_path):

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
-import os
 import signal
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
+from batch_fixtures import (
+    alive,
+    child_command,
+    cli_env,
+    ledger,
+    run_cli,
+    start_cli,
+    write_child,
+    write_scenarios,
+)
 
 from store.queue import QueueStore
 from store.states import FINAL, JobState
@@ -169,18 +177,6 @@ def test_resume_of_a_finished_batch_rewrites_the_report(tmp_path):
     assert other.returncode == 1 and "different command" in other.stderr
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as handle:
-            return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
-    except OSError:
-        return False
-
-
 def test_resume_ends_the_process_group_a_killed_runner_left_behind(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"orphan": "grandchild=1\nslow_first=60"})
@@ -195,14 +191,14 @@ def test_resume_ends_the_process_group_a_killed_runner_left_behind(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.communicate(timeout=10)
     orphans = [int((job_dir / name).read_text()) for name in ("child.pid", "grandchild.pid")]
-    assert all(_alive(pid) for pid in orphans)                    # nobody ended them yet
+    assert all(alive(pid) for pid in orphans)                    # nobody ended them yet
 
     start = time.monotonic()
     resumed = run_cli(["-o", "results", "--resume"], tmp_path, env, timeout=60)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert time.monotonic() - start < 20
     deadline = time.monotonic() + 5
-    while any(_alive(pid) for pid in orphans):
+    while any(alive(pid) for pid in orphans):
         assert time.monotonic() < deadline, "the orphaned process group survived --resume"
         time.sleep(0.05)
     assert ledger(tmp_path) == {"orphan": 1}

@@ -264,7 +264,11 @@ class Scenario(Node):
 
 @node
 class ScenarioFile(Node):
-    """A resolved file: its scenarios in file order, and where it came from."""
+    """A resolved file: its scenarios in file order, and where it came from.
+
+    ``search_paths`` are the folders the file's relative imports and user modules (external methods)
+    are found in: the file's own folder, or for a ``.sce`` the folder of the ``.osc`` it came from.
+    """
 
     path: str
     scenarios: tuple[Scenario, ...]

@@ -153,7 +153,9 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     from executor.runtime.session import SessionOptions, run_session
 
     scenario_dir = os.path.dirname(os.path.abspath(request.scenario))
-    add_import_paths([os.getcwd(), scenario_dir])
+    # A .sce file's user modules live beside the .osc it was generated from: the model says where.
+    model_dirs = [d for scenario_file, _ in loaded for d in scenario_file.search_paths]
+    add_import_paths([os.getcwd(), scenario_dir, *model_dirs])
     runs = plan_runs(loaded, output_root)
     if not runs:
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")

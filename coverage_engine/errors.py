@@ -29,18 +29,10 @@ class OscError(Exception):
             return f"{loc}: error: {self.message}"
         return f"error: {self.message}"
 
-    def render(self, text_of: dict[str, str] | None = None) -> str:
-        """The full message: ``file:line:col: error: msg``, then the source line and a caret when known.
-
-        ``text_of`` maps file names to their text, used when the error did not capture its source line.
-        """
+    def render(self) -> str:
+        """The full message: ``file:line:col: error: msg``, then the source line and a caret when known."""
         lines = [str(self)]
-        source_line = self.source_line
-        loc = self.location
-        if source_line is None and loc is not None and text_of and loc.file in text_of:
-            all_lines = text_of[loc.file].splitlines()
-            if 1 <= loc.line <= len(all_lines):
-                source_line = all_lines[loc.line - 1]
+        source_line, loc = self.source_line, self.location
         if source_line is not None and loc is not None:
             shown = source_line.rstrip("\r\n").expandtabs(1)
             lines.append("    " + shown)

@@ -16,7 +16,7 @@ from coverage_engine.behaviors import apply_modifiers, resolve_behavior
 from coverage_engine.checks import check_declarations
 from coverage_engine.errors import OscError, ParameterFileError, ResolveError
 from coverage_engine.imports import collect_units
-from coverage_engine.instances import global_value, instantiate
+from coverage_engine.instances import FieldInfo, global_value, instantiate
 from coverage_engine.namespace import build_namespace
 from coverage_engine.overrides import check_document, not_overridable_reason, override_hook
 from coverage_engine.scope import ResolveContext, Scope, TypedExpr
@@ -51,7 +51,7 @@ def _attach_source_line(exc: OscError, texts: dict[str, str]) -> None:
 def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], base: Path,
              overrides: Mapping | None) -> model.ScenarioFile:
     namespace = build_namespace(units, unit)
-    ctx = ResolveContext(namespace, overrides)
+    ctx = ResolveContext(namespace)
     for name in namespace.globals:
         global_value(ctx, name, namespace.globals[name].location)
     check_declarations(ctx, unit)
@@ -101,7 +101,5 @@ def _scenario(ctx: ResolveContext, stype: CompoundType, values: Mapping | None) 
                           tuple(events.values()), body, location)
 
 
-def _info(fdecl):
-    from coverage_engine.instances import FieldInfo
-
+def _info(fdecl) -> FieldInfo:
     return FieldInfo(fdecl.name, fdecl.type, fdecl.default, True, fdecl.location)

@@ -7,8 +7,6 @@ parent and finally to the globals of the :class:`ResolveContext`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 from coverage_engine import model, syntax
 from coverage_engine.namespace import Namespace
 from coverage_engine.nodes import Node, node
@@ -61,12 +59,11 @@ class Scope:
 
 
 class ResolveContext:
-    """State of one resolution: the namespace, global values computed so far, the variables created
-    for the scenario being resolved, and the parameter overrides of the run."""
+    """State of one resolution: the namespace, global values computed so far and the variables
+    created for the scenario being resolved."""
 
-    def __init__(self, namespace: Namespace, overrides: Mapping[str, object] | None = None) -> None:
+    def __init__(self, namespace: Namespace) -> None:
         self.namespace = namespace
-        self.overrides = overrides
         self.global_values: dict[str, TypedExpr] = {}
         self.globals_in_progress: list[str] = []
         self.variables: list[model.Variable] = []

@@ -55,7 +55,7 @@ class Scope:
         return None
 
     def child(self, names: dict[str, TypedExpr] | None = None, it: TypedExpr | None = None) -> Scope:
-        return Scope(self.ctx, names if names is not None else {}, it, self, dict(self.events))
+        return Scope(self.ctx, names if names is not None else {}, it, self, self.events)  # events are read-only
 
 
 class ResolveContext:

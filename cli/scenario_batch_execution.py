@@ -22,7 +22,7 @@ import traceback
 import click
 
 from executor.batch.errors import BatchError, BatchUsageError
-from store.database import StoreError
+from store.database import StoreError, StoreMissing
 
 PROG = "scenario_batch_execution"
 EXIT_USAGE = 2
@@ -113,10 +113,11 @@ def _debug_option(func):
     return click.option("-d", "--debug", is_flag=True, help="Show tracebacks of errors.")(func)
 
 
-def _open_store(url):
+def _open_store(url, *, existing: bool = False):
+    """The store at ``url``; ``existing``: it must exist already and is neither created nor migrated."""
     from store.queue import QueueStore
 
-    return QueueStore.open(url)
+    return QueueStore.open_existing(url) if existing else QueueStore.open(url)
 
 
 def _typed_options() -> list[str]:
@@ -259,7 +260,7 @@ def status_command(store_url, batch_id, debug):
     """Show jobs per state, running jobs per worker and host, and an ETA."""
     from executor.batch.status import render, snapshot
 
-    store = _open_store(store_url)
+    store = _open_store(store_url, existing=True)
     try:
         render(snapshot(store, _pick_batch(store, batch_id)), sys.stdout)
     finally:
@@ -277,7 +278,7 @@ def report_command(store_url, batch_id, output, debug):
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
     from executor.batch import runner
 
-    store = _open_store(store_url)
+    store = _open_store(store_url, existing=True)
     try:
         batch = _pick_batch(store, batch_id)
         counts = runner.write_batch_report(store, batch, output)
@@ -313,7 +314,7 @@ def main(argv: list[str] | None = None) -> None:
         code = 130
     except click.UsageError as exc:
         code = _fail(exc.format_message(), EXIT_USAGE)
-    except BatchUsageError as exc:
+    except (BatchUsageError, StoreMissing) as exc:
         code = _fail(str(exc), EXIT_USAGE)
     except click.ClickException as exc:
         code = _fail(exc.format_message(), exc.exit_code)

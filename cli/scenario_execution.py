@@ -2,7 +2,7 @@
 
 Thin click command: it parses options, calls the front end (``coverage_engine``) and the runtime
 (``executor``), and turns errors into one clear message and an exit code. Heavy packages (py_trees,
-rich, junit-xml) are imported only on the paths that need them, so ``-n``, ``-l`` and the template
+rich, the JUnit writer) are imported only on the paths that need them, so ``-n``, ``-l`` and the template
 option stay fast.
 
 Exit codes: 0 every scenario passed · 1 a scenario failed or the input is wrong · 2 usage error ·

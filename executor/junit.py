@@ -1,12 +1,15 @@
-"""Write ``test.xml`` (JUnit, via junit-xml): one testcase per executed scenario.
+"""Write ``test.xml`` for ``scenario_execution``: one testcase per executed scenario.
 
-A failed scenario carries its one-line reason as the failure message and the last tree snapshot as
-the failure text; a scenario an abort kept from starting is a skipped testcase. A file that cannot be
-parsed or resolved is reported as a single failing testcase (``parse_error_result``), so CI sees it
-too. ``timestamp`` is the scenario's local start time in ISO 8601 (``2026-11-22T07:00:20``), the form
-the JUnit schema asks for. The file is written to a temporary name and moved into place, so a reader
-never sees half a report; :class:`ReportWriter` rewrites it after each scenario, so a ``kill -9``
-loses only the scenario that was running.
+The document follows Jenkins' ``junit-10.xsd`` (built by :mod:`executor.junit_document`) and names
+its suite and testcases by the scheme of :mod:`executor.junit_names`: the suite after the scenario
+file, each testcase's classname after its source scenario and its name after the run (for a variant,
+its file stem and varied values). A failed scenario carries its one-line reason as the failure
+message and at the head of the failure text, followed by the last tree snapshot; a scenario an abort
+kept from starting is a skipped testcase. A file that cannot be parsed or resolved is reported as a
+single failing testcase (``parse_error_result``), so CI sees it too. The suite's ``timestamp`` is the
+local start time of its first scenario in ISO 8601 (``2026-11-22T07:00:20``). The file is written to a
+temporary name and moved into place, so a reader never sees half a report; :class:`ReportWriter`
+rewrites it after each scenario, so a ``kill -9`` loses only the scenario that was running.
 """
 
 from __future__ import annotations
@@ -14,13 +17,14 @@ from __future__ import annotations
 import os
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from executor.junit_document import Case, document, suite_element
+from executor.junit_names import file_stem, scenario_classname, variant_name
 from executor.runtime.results import ScenarioResult
 
-SUITE_NAME = "scenario_execution"
-CLASSNAME = "tests.scenario"
 RESULT_FILE = "test.xml"
 
 # The process umask, read once (it can only be read by setting it), so reports get the usual mode.
@@ -53,41 +57,111 @@ def iso_timestamp(epoch: float) -> str:
     return time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(epoch))
 
 
+@dataclass(frozen=True)
+class ReportNames:
+    """The names one scenario file's runs get in ``test.xml`` (see :mod:`executor.junit_names`).
+
+    ``cases`` maps a run name to its ``(classname, testcase name)``; a result without an entry (the
+    file did not load) is named ``(classname, name)``.
+    """
+
+    suite: str
+    classname: str
+    name: str
+    cases: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+
+    def of(self, run_name: str) -> tuple[str, str]:
+        return self.cases.get(run_name, (self.classname, self.name if run_name.startswith(PARSING) else run_name))
+
+    @classmethod
+    def plain(cls, label: str = "scenario_execution") -> ReportNames:
+        """Names for results that come from no particular file (tests, embedded use)."""
+        return cls(suite=label, classname=label, name=label)
+
+
+#: The start of the name of the result recorded for a file that could not be loaded.
+PARSING = "Parsing of "
+
+
+def report_names(scenario_file: str, runs: Sequence[tuple[str, str]] = (),
+                 variant: tuple[str, str, Mapping[str, object]] | None = None) -> ReportNames:
+    """Names for the runs ``[(run name, scenario name)]`` of ``scenario_file``.
+
+    ``variant`` is ``(source file, scenario, assignment)`` when the file is a variant (a ``.sce``).
+    """
+    stem = file_stem(scenario_file)
+    if variant is None:
+        cases = {run: (scenario_classname(stem, scenario), run) for run, scenario in runs}
+        return ReportNames(suite=stem, classname=stem, name=stem, cases=cases)
+    source, own, assignment = variant
+    classname = scenario_classname(source, own)
+    name = variant_name(stem, assignment, own)
+    cases = {}
+    for run, scenario in runs:
+        if scenario == own:
+            cases[run] = (classname, variant_name(stem + run[len(scenario):], assignment, own))
+        else:
+            cases[run] = (scenario_classname(source, scenario), f"{stem}:{run}")
+    return ReportNames(suite=stem, classname=classname, name=name, cases=cases)
+
+
 def parse_error_result(scenario_file: str, message: str, output: str = "") -> ScenarioResult:
     """The failing result recorded when ``scenario_file`` could not be loaded."""
-    return ScenarioResult(f"Parsing of {scenario_file}", False, message, output or message)
+    return ScenarioResult(f"{PARSING}{scenario_file}", False, message, output or message)
 
 
-def write_results(directory: str | os.PathLike, results: Sequence[ScenarioResult]) -> Path:
+def failure_text(message: str, detail: str | None) -> str:
+    """The text of a failure element: the reason first (GitLab shows only the text), then the detail."""
+    detail = (detail or "").strip("\n")
+    if not detail or detail == message:
+        return message
+    return f"{message}\n\n{detail}"
+
+
+def _case(result: ScenarioResult, names: ReportNames) -> Case:
+    classname, name = names.of(result.name)
+    if result.skipped:
+        return Case(name, classname, result.duration, "skipped", message=result.message or "not run")
+    if not result.passed:
+        message = result.message or "failed"
+        return Case(name, classname, result.duration, "failure", message=message,
+                    text=failure_text(message, result.output))
+    return Case(name, classname, result.duration)
+
+
+def results_xml(results: Sequence[ScenarioResult], names: ReportNames | None = None) -> str:
+    """The ``test.xml`` text for ``results``."""
+    names = names or ReportNames.plain()
+    starts = [r.start_time for r in results if r.start_time]
+    suite = suite_element(names.suite, [_case(r, names) for r in results],
+                          timestamp=iso_timestamp(min(starts)) if starts else None)
+    return document([suite])
+
+
+def write_results(directory: str | os.PathLike, results: Sequence[ScenarioResult],
+                  names: ReportNames | None = None) -> Path:
     """Write ``<directory>/test.xml`` for ``results`` (directory created if needed); returns the path."""
-    from junit_xml import TestCase, TestSuite, to_xml_report_string
-
-    cases = []
-    for result in results:
-        case = TestCase(result.name, classname=CLASSNAME, elapsed_sec=round(result.duration, 6),
-                        timestamp=iso_timestamp(result.start_time) if result.start_time else None)
-        if result.skipped:
-            case.add_skipped_info(message=result.message or "not run")
-        elif not result.passed:
-            case.add_failure_info(message=result.message or "failed", output=result.output or result.message)
-        cases.append(case)
-    suite = TestSuite(SUITE_NAME, cases)
-    text = to_xml_report_string([suite], prettyprint=True, encoding="utf-8")
     target = Path(directory) / RESULT_FILE
-    write_report(target, text)
+    write_report(target, results_xml(results, names))
     return target
 
 
-def write_grouped(results: Sequence[ScenarioResult], root: str | None, per_scenario: bool) -> list[Path]:
-    """Write the report(s): one combined file in ``root``, or one per scenario output directory."""
+def _groups(results: Sequence[ScenarioResult], root: str | None, per_scenario: bool) -> dict:
     if not per_scenario:
-        return [write_results(root, results)] if root else []
+        return {root: list(results)} if root else {}
     groups: dict[str, list[ScenarioResult]] = {}
     for result in results:
         directory = result.output_dir or root
         if directory:
             groups.setdefault(directory, []).append(result)
-    return [write_results(directory, group) for directory, group in groups.items()]
+    return groups
+
+
+def write_grouped(results: Sequence[ScenarioResult], root: str | None, per_scenario: bool,
+                  names: ReportNames | None = None) -> list[Path]:
+    """Write the report(s): one combined file in ``root``, or one per scenario output directory."""
+    return [write_results(directory, group, names)
+            for directory, group in _groups(results, root, per_scenario).items()]
 
 
 class ReportWriter:
@@ -95,26 +169,19 @@ class ReportWriter:
     whose content changed (atomically), so a killed run leaves the results of every finished scenario.
     """
 
-    def __init__(self, root: str | None, per_scenario: bool) -> None:
+    def __init__(self, root: str | None, per_scenario: bool, names: ReportNames | None = None) -> None:
         self.root = root
         self.per_scenario = per_scenario
+        self.names = names
         self._written: dict[str | None, tuple] = {}
 
     def update(self, results: Sequence[ScenarioResult]) -> list[Path]:
         """Write the report(s) for ``results`` (all results so far); returns the paths written."""
-        if not self.per_scenario:
-            groups = {self.root: list(results)} if self.root else {}
-        else:
-            groups = {}
-            for result in results:
-                directory = result.output_dir or self.root
-                if directory:
-                    groups.setdefault(directory, []).append(result)
         written = []
-        for directory, group in groups.items():
+        for directory, group in _groups(results, self.root, self.per_scenario).items():
             key = tuple((id(r), r.passed, r.skipped, r.message) for r in group)
             if self._written.get(directory) == key:
                 continue
-            written.append(write_results(directory, group))
+            written.append(write_results(directory, group, self.names))
             self._written[directory] = key
         return written

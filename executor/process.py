@@ -4,7 +4,9 @@ Used for batch jobs and for ``--post-run`` hooks. The child's stdout and stderr 
 log (the kernel writes them, so nothing is lost when the child or this process dies); with ``echo``
 they pass through a pipe and are copied to the log and to the terminal as they arrive; without a log
 the child shares this process's terminal. A timeout or a cancel signals the whole process group, then
-kills it after a grace period; whatever is left of the group when the child exits is killed too.
+kills it after a grace period, which the rest of the group gets even when the child itself ends
+sooner (a wrapper script that dies at once must not cut its scenario's report short); whatever is
+left of the group when the child exits is killed too.
 """
 
 from __future__ import annotations
@@ -90,6 +92,17 @@ def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
         return False
 
 
+def group_alive(pgid: int) -> bool:
+    """Whether any process of group ``pgid`` is left (zombies count until reaped)."""
+    try:
+        os.killpg(pgid, 0)
+        return True
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+
+
 #: Environment variable set for every job's child: ``<job id>.<attempt>``; it also marks the process group.
 JOB_ENV = "SCENARIO_BATCH_JOB"
 
@@ -142,6 +155,7 @@ class ChildProcess:
         self._timed_out = False
         self._cancelled = False
         self._started_at = 0.0
+        self._kill_at: float | None = None     # monotonic time of the SIGKILL a timeout or cancel arranged
 
     @property
     def pid(self) -> int | None:
@@ -189,6 +203,11 @@ class ChildProcess:
         returncode = self.proc.wait()
         finished = time.time()
         with self._lock:
+            deadline = self._kill_at
+        if deadline is not None:               # signalled: the rest of the group gets its grace period too
+            while time.monotonic() < deadline and group_alive(self.proc.pid):
+                time.sleep(0.02)
+        with self._lock:
             for timer in self._timers:
                 timer.cancel()
             self._timers.clear()
@@ -203,13 +222,16 @@ class ChildProcess:
         grace = self.grace if grace is None else grace
         with self._lock:
             self._cancelled = True
-            if self.proc is None or self.proc.returncode is not None:
+            if self.proc is None:
                 return
             if grace <= 0:
+                self._kill_at = time.monotonic()
                 kill_group(self.proc.pid)
                 return
+            if self.proc.returncode is not None:
+                return
             kill_group(self.proc.pid, signal.SIGINT)
-            self._arm_locked(grace, self._on_grace_over)
+            self._arm_kill_locked(grace)
 
     def _arm_locked(self, delay: float, action) -> None:
         timer = threading.Timer(delay, action)
@@ -217,13 +239,20 @@ class ChildProcess:
         self._timers.append(timer)
         timer.start()
 
+    def _arm_kill_locked(self, grace: float) -> None:
+        """SIGKILL the group ``grace`` seconds from now (or sooner, if an earlier kill is due)."""
+        deadline = time.monotonic() + grace
+        if self._kill_at is None or deadline < self._kill_at:
+            self._kill_at = deadline
+            self._arm_locked(grace, self._on_grace_over)
+
     def _on_timeout(self) -> None:
         with self._lock:
             if self.proc is None or self.proc.returncode is not None:
                 return
             self._timed_out = True
             kill_group(self.proc.pid, signal.SIGTERM)
-            self._arm_locked(self.grace, self._on_grace_over)
+            self._arm_kill_locked(self.grace)
 
     def _on_grace_over(self) -> None:
         with self._lock:

@@ -16,12 +16,12 @@ import time
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 
-from sqlalchemy import Connection, Engine, func, insert, select
+from sqlalchemy import Connection, Engine, func, insert, inspect, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 
 from store import queue_sql as sql
 from store import states
-from store.database import StoreError, ensure_schema, open_engine
+from store.database import StoreError, ensure_schema, open_engine, open_existing
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_queries import QueueQueries
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
@@ -53,6 +53,20 @@ class QueueStore(QueueQueries):
         """Open the store at ``url`` (``--store``, ``$SCENARIO_STORE`` or the default file) and create tables."""
         engine = open_engine(url)
         ensure_schema(engine, QUEUE_TABLES)
+        return cls(engine)
+
+    @classmethod
+    def open_existing(cls, url: str | None = None) -> QueueStore:
+        """Open a store that must exist already, creating and migrating nothing (``status``, ``report``).
+
+        :class:`~store.database.StoreMissing` when there is none at ``url``; a store without the queue's
+        tables reads as one without batches.
+        """
+        engine = open_existing(url)
+        if not inspect(engine).has_table(batches.name):
+            shown = engine.url.render_as_string(hide_password=True)
+            engine.dispose()
+            raise StoreError(f"the store {shown} holds no batch")
         return cls(engine)
 
     @property

@@ -1,7 +1,8 @@
-"""Variation assignments of scenario files, read from the ``variants`` table when the store has one.
+"""What the store knows about scenario files that are variants: assignment, scenario and source file.
 
 The batch queue does not depend on the variation tables (another part of the store owns them): it
-only asks, by file path, for the ``assignment`` JSON of files that are variants known to the store.
+only asks, by file path, for the ``variants`` rows of files that are variants known to the store,
+reading whichever of the columns it needs the table has.
 """
 
 from __future__ import annotations
@@ -9,11 +10,21 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Iterable
+from dataclasses import dataclass, field
 
 from sqlalchemy import Engine, MetaData, Table, inspect, select
 from sqlalchemy.exc import SQLAlchemyError
 
 _CHUNK = 500
+
+
+@dataclass(frozen=True)
+class VariantInfo:
+    """A variant as recorded by ``scenario_variation``: its varied values, scenario and source file."""
+
+    assignment: dict[str, object] = field(default_factory=dict)
+    scenario: str | None = None
+    source: str | None = None
 
 
 def _candidates(path: str) -> set[str]:
@@ -26,8 +37,8 @@ def _candidates(path: str) -> set[str]:
     return names
 
 
-def variant_assignments(engine: Engine, paths: Iterable[str]) -> dict[str, dict[str, object]]:
-    """Map each of ``paths`` that is a known variant to its assignment; empty when there is no ``variants`` table."""
+def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo]:
+    """Map each of ``paths`` that is a known variant to what the store says of it (empty without a ``variants`` table)."""
     wanted: dict[str, str] = {}
     for path in paths:
         for name in _candidates(path):
@@ -35,24 +46,36 @@ def variant_assignments(engine: Engine, paths: Iterable[str]) -> dict[str, dict[
     if not wanted:
         return {}
     try:
-        if not inspect(engine).has_table("variants"):
+        inspector = inspect(engine)
+        if not inspector.has_table("variants"):
             return {}
-        table = Table("variants", MetaData(), autoload_with=engine)
+        metadata = MetaData()
+        table = Table("variants", metadata, autoload_with=engine)
         if "file_path" not in table.c or "assignment" not in table.c:
             return {}
-        found: dict[str, dict[str, object]] = {}
+        columns = [table.c.file_path, table.c.assignment]
+        columns.append(table.c.scenario if "scenario" in table.c else table.c.file_path.label("no_scenario"))
+        joined = table
+        if "source_id" in table.c and inspector.has_table("source_files"):
+            sources = Table("source_files", metadata, autoload_with=engine)
+            joined = table.outerjoin(sources, table.c.source_id == sources.c.id)
+            columns.append(sources.c.path.label("source_path"))
+        found: dict[str, VariantInfo] = {}
         names = sorted(wanted)
         with engine.connect() as conn:
             for start in range(0, len(names), _CHUNK):
                 chunk = names[start:start + _CHUNK]
-                stmt = select(table.c.file_path, table.c.assignment).where(table.c.file_path.in_(chunk))
+                stmt = select(*columns).select_from(joined).where(table.c.file_path.in_(chunk))
                 if "id" in table.c:
                     stmt = stmt.order_by(table.c.id)       # the newest row for a path wins
-                rows = conn.execute(stmt)
-                for file_path, assignment in rows:
-                    value = json.loads(assignment) if isinstance(assignment, str) else assignment
-                    if isinstance(value, dict):
-                        found[wanted[file_path]] = value
+                for row in conn.execute(stmt):
+                    value = json.loads(row[1]) if isinstance(row[1], str) else row[1]
+                    if not isinstance(value, dict):
+                        continue
+                    scenario = row[2] if "scenario" in table.c else None
+                    source = row[3] if len(row) > 3 else None
+                    found[wanted[row[0]]] = VariantInfo(value, scenario, source)
         return found
     except (SQLAlchemyError, ValueError):
         return {}
+

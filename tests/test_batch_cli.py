@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import sqlite3
 import sys
 import time
@@ -162,7 +163,8 @@ def test_missing_garbage_empty_xml_and_big_output(tmp_path):
         suite = suites[name]
         assert (suite.get("tests"), suite.get("errors")) == ("1", "1"), name
         error = suite.find("testcase/error")
-        assert "exit code 0" in error.get("message") and f"start {name}" in (error.text or "")
+        assert "exit code 0" in error.get("message") and error.text.startswith(error.get("message"))
+        assert f"start {name}" in suite.find("testcase/system-out").text
     assert [c.get("name") for c in suites["two"].iter("testcase")] == ["first", "second"]
     assert suites["two"].get("failures") == "1"
     root = ET.parse(tmp_path / "results" / "test.xml").getroot()
@@ -173,7 +175,10 @@ def test_return_value_and_ignore_flag(tmp_path):
     specs = {"rc3": "exit=3"}
     assert _batch(tmp_path, specs).returncode == 1
     suite = _suites(tmp_path / "results" / "test.xml")["rc3"]
-    assert suite.get("failures") == "1" and "exit code 3" in suite.find("testcase/failure").get("message")
+    # an exit code despite a passing test.xml is an error on that testcase, not a test failure or a new testcase
+    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("1", "0", "1")
+    error = suite.find("testcase/error")
+    assert error.get("type") == "exit-code" and error.get("message") == "exit code 3 although its test.xml passed"
     again = run_cli(["-i", "in", "-o", "results", "-r", "--", *child_command(tmp_path / "child.py")], tmp_path)
     assert again.returncode == 0, again.stdout
 
@@ -323,7 +328,54 @@ def test_incompatible_store_is_refused(tmp_path):
     assert "schema version 99" in result.stderr and "Traceback" not in result.stderr
 
 
-def test_progress_display_only_on_a_terminal_without_no_color(monkeypatch):
+def _on_a_terminal(tmp_path: Path, **env: str) -> bytes:
+    """Run a 4-job batch (-j 2) with a pseudo-terminal as stdout; returns what the terminal received."""
+    import pty
+    import subprocess
+
+    from batch_fixtures import CLI
+
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {f"s{i}": "sleep=0.4" for i in range(4)})
+    leader, follower = pty.openpty()
+    full_env = {**cli_env(tmp_path), "TERM": "xterm-256color", "COLUMNS": "120", **env}
+    full_env.pop("NO_COLOR", None)
+    full_env.update(env)
+    proc = subprocess.Popen([CLI, "-i", "in", "-o", "results", "-j", "2", "--", *child_command(child)],
+                            cwd=tmp_path, env=full_env, stdin=follower, stdout=follower, stderr=follower)
+    os.close(follower)
+    output = b""
+    while True:
+        try:
+            chunk = os.read(leader, 65536)
+        except OSError:                          # the terminal closed with the last writer
+            break
+        if not chunk:
+            break
+        output += chunk
+    os.close(leader)
+    assert proc.wait(timeout=60) == 0, output.decode(errors="replace")
+    import shutil
+
+    shutil.rmtree(tmp_path / "results")
+    (tmp_path / ".scenario_store.db").unlink()
+    return output
+
+
+#: SGR sequences that set a colour (foreground/background, 8, 16, 256 or true colour).
+_COLOUR = re.compile(rb"\x1b\[(?:[0-9;]*;)?(?:3[0-9]|4[0-9]|9[0-7]|10[0-7])(?:;[0-9;]*)?m")
+_BAR = "━".encode()
+
+
+def test_no_color_keeps_the_progress_bar_and_drops_the_colours(tmp_path):
+    coloured = _on_a_terminal(tmp_path)
+    assert _BAR in coloured and _COLOUR.search(coloured)
+    plain = _on_a_terminal(tmp_path, NO_COLOR="1")
+    assert _BAR in plain and b"4/4" in plain
+    assert not _COLOUR.search(plain), _COLOUR.search(plain)
+
+
+def test_progress_display_only_on_a_terminal(monkeypatch):
     import pty
 
     from executor.batch.progress import PlainReporter, RichReporter, make_reporter, wants_rich
@@ -331,11 +383,26 @@ def test_progress_display_only_on_a_terminal_without_no_color(monkeypatch):
     leader, follower = pty.openpty()
     with os.fdopen(leader, "rb") as _, os.fdopen(follower, "w") as terminal, \
             open(os.devnull, "w") as not_terminal:
-        monkeypatch.delenv("NO_COLOR", raising=False)
         monkeypatch.setenv("TERM", "xterm")
         assert wants_rich(terminal) and not wants_rich(not_terminal)
         monkeypatch.setattr(sys, "stdout", terminal)
         assert isinstance(make_reporter(4), RichReporter)
         assert isinstance(make_reporter(1), PlainReporter)        # -j 1 shows the children's output instead
-        monkeypatch.setenv("NO_COLOR", "1")
+        monkeypatch.setenv("TERM", "dumb")
         assert not wants_rich(terminal) and isinstance(make_reporter(4), PlainReporter)
+
+
+def test_status_and_report_never_create_or_migrate_a_store(tmp_path):
+    for command in (["status"], ["report", "-o", "r.xml"]):
+        done = run_cli([*command, "--store", "sqlite:///missing.db"], tmp_path)
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert "there is no store at" in done.stderr and str(tmp_path / "missing.db") in done.stderr
+        assert not list(tmp_path.iterdir())
+    other = tmp_path / "variants.db"
+    with sqlite3.connect(other) as conn:        # a database of another kind: no version table
+        conn.execute("CREATE TABLE unrelated (x)")
+    before = other.read_bytes()
+    done = run_cli(["status", "--store", f"sqlite:///{other}"], tmp_path)
+    assert done.returncode == 2 and "is not a scenario store" in done.stderr
+    assert other.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["variants.db"]

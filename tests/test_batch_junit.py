@@ -1,4 +1,4 @@
-"""The merged JUnit report: totals, names, properties, and robustness against any child XML."""
+"""The merged JUnit report: totals, names, properties, schema, and robustness against any child XML."""
 
 from __future__ import annotations
 
@@ -6,11 +6,13 @@ import xml.etree.ElementTree as ET
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from tests_schema import assert_valid
 
 from executor.batch.junit_merge import merged_report
 from executor.junit import write_report
 from store.jobs import Job
 from store.states import JobState
+from store.variant_lookup import VariantInfo
 
 OUTCOME_TAG = {"failure": "<failure message='f'/>", "error": "<error message='e'/>",
                "skipped": "<skipped/>", "passed": "",
@@ -35,33 +37,44 @@ def _root(text: str) -> ET.Element:
     return ET.fromstring(text.encode())
 
 
-def test_error_timeout_and_exit_code_cases():
+def test_one_testcase_per_job_whatever_happened_to_it():
     jobs = [
         _job("none", JobState.ERROR, None, 0, reason="no test.xml written (exit code 0)"),
-        _job("slow", JobState.TIMEOUT, None, 1, exit_code=-15, reason="timed out after 2 s"),
-        _job("rc", JobState.FAILED, _child_xml(["passed"]), 2, exit_code=3, reason="exit code 3"),
+        _job("slow", JobState.TIMEOUT, _child_xml(["failure"]), 1, exit_code=143, reason="timed out after 2 s"),
+        _job("rc", JobState.ERROR, _child_xml(["passed"]), 2, exit_code=3,
+             reason="exit code 3 although its test.xml passed"),
         _job("left_out", JobState.CANCELLED, None, 3),
         _job("queued", JobState.QUEUED, None, 4),
     ]
-    root = _root(merged_report(jobs, {"/in/rc.sce": {"speed": 3}}))
+    text = merged_report(jobs, {"/in/rc.sce": VariantInfo({"sc.speed": 3}, "sc", "/src/drive.osc")})
+    assert_valid(text)
+    root = _root(text)
     suites = {s.get("name"): s for s in root.iter("testsuite")}
     assert list(suites) == ["none", "slow", "rc"]
-    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("4", "1", "2")
-    assert float(root.get("time")) == 1.5 + 1.5 + 0.5          # job durations where the child gave none
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("3", "0", "3")
+    assert float(root.get("time")) == 1.5 + 1.5 + 0.5      # job durations where the child gave none or timed out
     error = suites["none"].find("testcase/error")
-    assert "exit code 0" in error.get("message") and "last words" in error.text
-    assert suites["slow"].find("testcase/error").get("type") == "timeout"
-    rc_cases = [c.get("name") for c in suites["rc"].iter("testcase")]
-    assert rc_cases == ["rc", "rc [exit code]"]
+    assert error.get("message") == "no test.xml written (exit code 0)"
+    assert error.text.startswith(error.get("message")) and "last words" in suites["none"].find(
+        "testcase/system-out").text
+    slow = suites["slow"].findall("testcase")
+    assert len(slow) == 1 and slow[0].find("error").get("type") == "timeout"
+    assert slow[0].find("error").get("message") == "timed out after 2 s"
+    assert slow[0].find("failure") is None
+    rc_cases = suites["rc"].findall("testcase")
+    assert [(c.get("classname"), c.get("name")) for c in rc_cases] == [("drive.sc", "rc[speed=3]")]
+    assert rc_cases[0].find("error").get("type") == "exit-code"
     props = {p.get("name"): p.get("value") for p in suites["rc"].iter("property")}
-    assert props["variation.speed"] == "3" and props["exit_code"] == "3" and props["testcase"] == "t0"
+    assert props["variation.sc.speed"] == "3" and props["exit_code"] == "3" and props["testcase"] == "t0"
 
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.lists(st.sampled_from(sorted(OUTCOME_TAG)), min_size=1, max_size=4), min_size=1, max_size=6))
 def test_totals_are_sums_of_the_testcases(children):
     jobs = [_job(f"j{i}", JobState.PASSED, _child_xml(outcomes), i) for i, outcomes in enumerate(children)]
-    root = _root(merged_report(jobs))
+    text = merged_report(jobs)
+    assert_valid(text)
+    root = _root(text)
     flat = [o for outcomes in children for o in outcomes]
     assert int(root.get("tests")) == len(flat)
     assert int(root.get("failures")) == flat.count("failure") + flat.count("bare_failure")
@@ -95,8 +108,14 @@ def test_entity_expansion_is_refused_and_report_written_atomically(tmp_path):
     assert [p.name for p in target.parent.iterdir()] == ["test.xml"]
 
 
-def test_child_timestamps_are_kept():
-    child = ("<testsuites><testsuite name='x'><testcase classname='c' name='t' time='0.5' "
-             "timestamp='2026-11-22T07:20:00'/></testsuite></testsuites>")
-    root = _root(merged_report([_job("ts", JobState.PASSED, child)]))
-    assert [c.get("timestamp") for c in root.iter("testcase")] == ["2026-11-22T07:20:00"]
+def test_times_and_timestamps_fit_the_schema():
+    child = ("<testsuites><testsuite name='x'><testcase classname='c' name='t' time='1e-05' "
+             "timestamp='2026-11-22T07:20:00'/><testcase name='u' time='-3'/></testsuite></testsuites>")
+    job = Job(id=1, batch_id=1, seq=0, name="ts", scenario_path="/in/ts.osc", scenario_sha="0",
+              status=JobState.PASSED, attempts=1, exit_code=0, started_at=1_700_000_000.0, duration=1.0, junit_xml=child)
+    text = merged_report([job])
+    assert_valid(text)
+    root = _root(text)
+    assert [c.get("time") for c in root.iter("testcase")] == ["0.000010", "0.000000"]
+    assert [c.get("timestamp") for c in root.iter("testcase")] == [None, None]
+    assert root.find("testsuite").get("timestamp").startswith("2023-11-1")

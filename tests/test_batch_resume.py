@@ -148,7 +148,7 @@ def test_report_written_at_ctrl_c_counts_every_job_and_resume_replaces_it(tmp_pa
     assert cases["s0"][0] == "passed"
     assert cases["s1"] == ("error", "cancelled", "interrupted (Ctrl-C); run again with --resume")
     for name in names[2:]:
-        assert cases[name] == ("skipped", "skipped", "not run: the batch was interrupted; --resume runs it")
+        assert cases[name] == ("skipped", None, "not run: the batch was interrupted; --resume runs it")
     numbers = [line.split("]")[0] + "]" for line in out.splitlines() if line.startswith("[")]
     assert numbers == ["[1/6]", "[2/6]"], out                     # the cancelled job has its own number
 

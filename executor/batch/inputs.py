@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -26,13 +27,20 @@ SCENARIO_SUFFIXES = (".sce", ".osc")
 MAX_STORED_TEXT = 1024 * 1024
 
 
+def natural_key(name: str) -> tuple:
+    """Sort key that orders the numbers inside names by value: ``cut2`` before ``cut10``."""
+    parts = re.split(r"(\d+)", name)
+    return tuple((1, int(part), part) if index % 2 else (0, part, "") for index, part in enumerate(parts))
+
+
 def discover(input_dir: str | os.PathLike[str]) -> list[Path]:
-    """The .sce and .osc files directly in ``input_dir``, sorted by name; :class:`NoScenarios` if none."""
+    """The .sce and .osc files directly in ``input_dir`` in natural order of their names (``cut2`` before
+    ``cut10``), which is the order jobs are run and reported in; :class:`NoScenarios` if none."""
     folder = Path(input_dir)
     if not folder.is_dir():
         raise NoScenarios(f"input folder {str(folder)!r} does not exist or is not a folder")
     files = sorted((p for p in folder.iterdir() if p.suffix in SCENARIO_SUFFIXES and p.is_file()),
-                   key=lambda p: p.name)
+                   key=lambda p: natural_key(p.name))
     if not files:
         raise NoScenarios(f"no .sce or .osc file in {str(folder)!r}")
     names = [p.stem for p in files]

@@ -1,62 +1,58 @@
-"""The merged JUnit report of a batch: one testsuite per job, written with junit-xml.
+"""The merged JUnit report of a batch: one testsuite per job, one testcase per scenario the job ran.
 
-Each suite is named after the job's file and holds the child's testcases. A child that reported one
-testcase has it named after the job (so the variants of one scenario stay apart in CI), the original
-name kept in the suite's ``testcase`` property; several testcases keep their names. A job without a
-readable report becomes one testcase with an ``error`` carrying the exit code and the end of its log;
-a timeout is an error of type ``timeout``. A job that ``--halt-on-failure`` kept from starting is one
-skipped testcase, so CI's test count never shrinks. The report written when Ctrl-C (or SIGTERM) stopped
-the batch also counts the jobs it stopped (an error of type ``cancelled``) and those it kept from
-starting (skipped), so an interrupted batch never looks like a clean pass. Totals are computed by
-junit-xml from the testcases.
+Each suite is named after the job's file and holds the child's testcases; the document follows
+Jenkins' ``junit-10.xsd`` (:mod:`executor.junit_document`). Names follow :mod:`executor.junit_names`:
+a child that reported one testcase has it named after the job (classname: the source scenario, name:
+the variant with its varied values), whatever happened to the job; several testcases keep their names.
+
+Whatever happens to a job, it keeps its testcases and adds none: a timeout, a crash, a non-zero exit
+although test.xml passed, or a missing report becomes the result element of the job's testcase (the
+one that was running or failed, else the last): an ``error`` whose ``type`` says which (``timeout``,
+``error``, ``exit-code``, ``cancelled``), whose ``message`` is the reason (``timed out after 1.2 s``)
+and whose text starts with that reason, followed by what the child reported. A job with no readable
+report is one such testcase. A testcase of a job that did not pass carries the end of the job's
+``log.txt`` in ``system-out``. A job that ``--halt-on-failure`` kept from starting is one skipped
+testcase, so CI's test count never shrinks; the report written when Ctrl-C (or SIGTERM) stopped the
+batch counts the jobs it stopped (error of type ``cancelled``) and those it kept from starting
+(skipped). Totals are computed from the testcases.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
 
-from junit_xml import TestCase, TestSuite, to_xml_report_string
-
-from executor.batch.junit_read import CaseRecord, JunitUnreadable, has_problem, read_cases
+from executor.batch.junit_read import JunitUnreadable, read_cases
+from executor.junit import failure_text, iso_timestamp
+from executor.junit_document import Case, document, suite_element
+from executor.junit_names import declared_scenarios, scenario_classname, variant_name
 from store.jobs import Job
 from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
+from store.variant_lookup import VariantInfo
 
 #: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
 REPORT_LOG_CHARS = 16 * 1024
 
-#: Above this many characters the report is written without indentation (pretty-printing costs memory).
+#: Above this many characters the report is written without indentation.
 _PRETTY_LIMIT = 8 * 1024 * 1024
-
-
-def _case(record: CaseRecord, name: str | None = None) -> TestCase:
-    case = TestCase(name or record.name, classname=record.classname, elapsed_sec=record.time,
-                    stdout=record.stdout, stderr=record.stderr, timestamp=record.timestamp)
-    # junit-xml counts a failure, error or skip only when it has a message or text, so a child's
-    # bare <failure/> gets its kind as the message rather than turning into a pass.
-    message = record.message or record.type or record.outcome
-    if record.outcome == "failure":
-        case.add_failure_info(message=message, output=record.text, failure_type=record.type)
-    elif record.outcome == "error":
-        case.add_error_info(message=message, output=record.text, error_type=record.type)
-    elif record.outcome == "skipped":
-        case.add_skipped_info(message=message, output=record.text)
-    return case
-
 
 #: The message of the skipped testcase of a job that a halt kept from running.
 HALTED_MESSAGE = "not run: the batch halted after a failure"
-
-
-def halted(job: Job) -> bool:
-    """Whether ``--halt-on-failure`` cancelled the job before it started."""
-    return job.status is JobState.CANCELLED and job.reason == HALT_REASON
-
 
 #: The skipped message of a job an interruption kept from starting.
 NOT_RUN_MESSAGE = "not run: the batch was interrupted; --resume runs it"
 
 #: The error type of a job an interruption stopped while it ran.
 CANCELLED_TYPE = "cancelled"
+
+#: Largest scenario file read to name a job that the store does not know as a variant.
+_MAX_PEEK = 256 * 1024
+
+
+def halted(job: Job) -> bool:
+    """Whether ``--halt-on-failure`` cancelled the job before it started."""
+    return job.status is JobState.CANCELLED and job.reason == HALT_REASON
 
 
 def interrupted_message(how: str) -> str:
@@ -75,15 +71,52 @@ def _tail(text: str | None) -> str | None:
     return text[-REPORT_LOG_CHARS:]
 
 
-def job_suite(job: Job, assignment: Mapping[str, object] | None = None,
-              interrupted: str | None = None) -> TestSuite:
-    """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped."""
-    cases: list[CaseRecord] = []
-    if job.junit_xml:
-        try:
-            cases = read_cases(job.junit_xml)
-        except JunitUnreadable:
-            cases = []
+@dataclass(frozen=True)
+class JobNames:
+    """The classname and name of a job's testcase (see :mod:`executor.junit_names`)."""
+
+    classname: str
+    name: str
+
+
+def _peek(path: str) -> str | None:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            return handle.read(_MAX_PEEK)
+    except OSError:
+        return None
+
+
+def _variant_from_file(path: str) -> VariantInfo | None:
+    """A ``.sce`` that the store does not know: its own header says what it is."""
+    from coverage_engine.errors import OscError
+    from coverage_engine.sce import parse_sce
+
+    text = _peek(path)
+    if text is None:
+        return None
+    try:
+        document = parse_sce(text, path)
+    except OscError:
+        return None
+    return VariantInfo(document.assignment, document.scenario, document.source)
+
+
+def job_names(job: Job, variant: VariantInfo | None = None) -> JobNames:
+    """Names of the job's testcase: from the store's variant record, else the file itself, else its stem."""
+    if variant is None and job.scenario_path.endswith(".sce"):
+        variant = _variant_from_file(job.scenario_path)
+    if variant is not None and variant.scenario:
+        source = variant.source or job.name
+        return JobNames(scenario_classname(source, variant.scenario),
+                        variant_name(job.name, variant.assignment, variant.scenario))
+    text = _peek(job.scenario_path) if job.scenario_path.endswith(".osc") else None
+    scenarios = declared_scenarios(text) if text else []
+    stem = Path(job.scenario_path).stem or job.name
+    return JobNames(scenario_classname(stem, scenarios[0] if len(scenarios) == 1 else None), job.name)
+
+
+def _properties(job: Job, variant: VariantInfo | None, cases: list[Case]) -> dict[str, str]:
     properties: dict[str, str] = {
         "scenario_file": job.scenario_path,
         "status": job.status.value,
@@ -96,59 +129,98 @@ def job_suite(job: Job, assignment: Mapping[str, object] | None = None,
         properties["host"] = job.worker_host
     if job.output_dir:
         properties["output_dir"] = job.output_dir
-    for key, value in sorted((assignment or {}).items()):
+    for key, value in sorted((variant.assignment if variant else {}).items()):
         properties[f"variation.{key}"] = str(value)
+    if len(cases) == 1:
+        properties["testcase"] = cases[0].name
+    return properties
 
-    exit_text = "no exit code" if job.exit_code is None else f"exit code {job.exit_code}"
-    message = job.reason or job.status.value
-    if "exit code" not in message and "killed by" not in message:
-        message += f" ({exit_text})"
-    kind = "timeout" if job.status is JobState.TIMEOUT else "error"
-    test_cases: list[TestCase] = []
+
+#: The error type of each verdict that is not the scenario's own failure.
+_ERROR_TYPES = {JobState.TIMEOUT: "timeout", JobState.ERROR: "error", JobState.CANCELLED: CANCELLED_TYPE}
+
+
+def _job_problem(job: Job, cases: list[Case]) -> tuple[str, str, str] | None:
+    """``(element, type, message)`` the job's own verdict puts on its testcase, or None when the child's cases say it all."""
+    if job.status is JobState.PASSED:
+        return None
+    reason = job.reason or job.status.value
+    if job.status is JobState.FAILED:
+        if any(case.problem for case in cases):
+            return None
+        return "failure", "failure", reason
+    kind = _ERROR_TYPES.get(job.status, "error")
+    if job.status is JobState.ERROR and cases and "although its test.xml passed" in reason:
+        kind = "exit-code"
+    if job.status is JobState.ERROR and not cases and "exit code" not in reason and "killed by" not in reason:
+        reason += " (no exit code)" if job.exit_code is None else f" (exit code {job.exit_code})"
+    return "error", kind, reason
+
+
+def _target(cases: list[Case]) -> int:
+    """Which testcase a job-level problem belongs to: the first that failed or erred, else the last run."""
+    for index, case in enumerate(cases):
+        if case.problem:
+            return index
+    ran = [i for i, case in enumerate(cases) if case.outcome != "skipped"]
+    return ran[-1] if ran else len(cases) - 1
+
+
+def child_cases(job: Job) -> list[Case]:
+    """The testcases of the job's own report (none when it has no readable one)."""
+    if not job.junit_xml:
+        return []
+    try:
+        return read_cases(job.junit_xml)
+    except JunitUnreadable:
+        return []
+
+
+def job_cases(job: Job, names: JobNames, cases: list[Case], interrupted: str | None = None) -> list[Case]:
+    """The testcases of one job, from the child's ``cases``: never none, never one more than the child reported."""
+    cases = list(cases)
     if halted(job):
-        case = TestCase(job.name, classname=job.name, elapsed_sec=None)
-        case.add_skipped_info(message=HALTED_MESSAGE)
-        test_cases.append(case)
-    elif interrupted is not None and job.status not in FINAL:
-        case = TestCase(job.name, classname=job.name, elapsed_sec=None)
+        return [Case(names.name, names.classname, None, "skipped", message=HALTED_MESSAGE)]
+    if interrupted is not None and job.status not in FINAL:
         if _not_started(job):
-            case.add_skipped_info(message=NOT_RUN_MESSAGE)
-        else:
-            case.elapsed_sec = job.duration
-            case.add_error_info(message=interrupted_message(interrupted), output=_tail(job.log_tail),
-                                error_type=CANCELLED_TYPE)
-        test_cases.append(case)
+            return [Case(names.name, names.classname, None, "skipped", message=NOT_RUN_MESSAGE)]
+        message = interrupted_message(interrupted)
+        return [Case(names.name, names.classname, job.duration, "error", message=message, type=CANCELLED_TYPE,
+                     text=failure_text(message, None), stdout=_tail(job.log_tail))]
+    if len(cases) == 1:
+        time = cases[0].time if cases[0].time is not None else job.duration
+        cases = [replace(cases[0], name=names.name, classname=names.classname, time=time)]
     elif not cases:
-        case = TestCase(job.name, classname=job.name, elapsed_sec=job.duration)
-        if job.status is JobState.PASSED:
-            pass
-        elif job.status is JobState.FAILED:
-            case.add_failure_info(message=message, output=_tail(job.log_tail), failure_type="failure")
-        else:
-            case.add_error_info(message=message, output=_tail(job.log_tail), error_type=kind)
-        test_cases.append(case)
-    else:
-        if len(cases) == 1:
-            properties["testcase"] = cases[0].name
-            case = _case(cases[0], name=job.name)
-            if case.elapsed_sec is None:
-                case.elapsed_sec = job.duration        # the suite's time is the sum of its testcases
-            test_cases.append(case)
-        else:
-            test_cases.extend(_case(c) for c in cases)
-        if job.status in (JobState.ERROR, JobState.TIMEOUT):
-            extra = TestCase(f"{job.name} [{job.status.value}]", classname=job.name, elapsed_sec=None)
-            extra.add_error_info(message=message, output=_tail(job.log_tail), error_type=kind)
-            test_cases.append(extra)
-        elif job.status is JobState.FAILED and not has_problem(cases):
-            extra = TestCase(f"{job.name} [exit code]", classname=job.name, elapsed_sec=None)
-            extra.add_failure_info(message=message, output=_tail(job.log_tail), failure_type="exit-code")
-            test_cases.append(extra)
-    return TestSuite(job.name, test_cases, hostname=job.worker_host, properties=properties,
-                     file=job.scenario_path)
+        cases = [Case(names.name, names.classname, job.duration)]
+    problem = _job_problem(job, cases)
+    if problem is not None:
+        index = _target(cases)
+        case = cases[index]
+        element, kind, message = problem
+        earlier = case.text or (case.message if case.outcome != "passed" else None)
+        time = job.duration if job.duration is not None and job.status is JobState.TIMEOUT else case.time
+        cases[index] = replace(case, outcome=element, type=kind, message=message,
+                               text=failure_text(message, earlier), time=time)
+    if job.status is not JobState.PASSED:
+        log = _tail(job.log_tail)
+        for index, case in enumerate(cases):
+            if case.problem:
+                if case.message and not (case.text or "").startswith(case.message):
+                    case = replace(case, text=failure_text(case.message, case.text))
+                cases[index] = case if case.stdout or not log else replace(case, stdout=log)
+    return cases
 
 
-def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, object]] | None = None,
+def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | None = None):
+    """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped."""
+    reported = child_cases(job)
+    cases = job_cases(job, job_names(job, variant), reported, interrupted)
+    return suite_element(job.name, cases, timestamp=iso_timestamp(job.started_at) if job.started_at else None,
+                         hostname=job.worker_host, file=job.scenario_path,
+                         properties=_properties(job, variant, reported))
+
+
+def merged_report(jobs: Iterable[Job], variants: Mapping[str, VariantInfo] | None = None,
                   *, interrupted: str | None = None) -> str:
     """The merged JUnit XML of the jobs that have a verdict, and of those a halt kept from running (as skipped).
 
@@ -156,14 +228,12 @@ def merged_report(jobs: Iterable[Job], assignments: Mapping[str, Mapping[str, ob
     progress). With it (``Ctrl-C``, ``SIGTERM``: the report written when that stopped the batch) every job
     is in: one stopped while it ran is an error of type ``cancelled``, one not started is skipped.
     """
-    assignments = assignments or {}
+    variants = variants or {}
     suites = []
     size = 0
     for job in jobs:
         if job.status not in FINAL and not halted(job) and interrupted is None:
             continue
-        suites.append(job_suite(job, assignments.get(job.scenario_path), interrupted))
+        suites.append(job_suite(job, variants.get(job.scenario_path), interrupted))
         size += len(job.junit_xml or "") + min(len(job.log_tail or ""), REPORT_LOG_CHARS)
-    return to_xml_report_string(suites, prettyprint=size < _PRETTY_LIMIT)
-
-
+    return document(suites, indent=size < _PRETTY_LIMIT)

@@ -1,9 +1,10 @@
 """What people see while a batch runs: a rich progress display on a terminal, plain lines otherwise.
 
 The worker loop calls a :class:`Reporter`; it never prints itself. Plain output is one line per
-finished job (``[3/10] passed  a_ok  0.52 s``; every job that ends gets the next number, a cancelled one
-too, so after Ctrl-C the numbers still count the jobs that ended; a retry line has none), used when stdout is not a terminal, when ``NO_COLOR``
-is set, or with ``-j 1`` (where the child's own output is shown live instead of a progress bar).
+finished job (``[3/10] passed  a_ok  0.52 s``; every job that ends gets the next number, a cancelled
+one too, so after Ctrl-C the numbers still count the jobs that ended; a retry line has none), used
+when stdout is not a terminal or ``TERM=dumb``, or with ``-j 1`` (where the child's own output is
+shown live instead of a progress bar). ``NO_COLOR`` keeps the display and drops its colours.
 """
 
 from __future__ import annotations
@@ -115,9 +116,13 @@ class RichReporter(Reporter):
 
 
 def wants_rich(stream: TextIO | None = None) -> bool:
-    """Rich display only on a real terminal, without ``NO_COLOR`` and with a capable ``TERM``."""
+    """Rich display only on a real terminal with a capable ``TERM``.
+
+    ``NO_COLOR`` (no-color.org) asks for no colour, nothing else: the display stays, rich drops its
+    colours (it reads ``NO_COLOR`` itself).
+    """
     stream = stream or sys.stdout
-    if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
+    if os.environ.get("TERM") == "dumb":
         return False
     try:
         return stream.isatty()

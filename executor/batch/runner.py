@@ -25,7 +25,7 @@ from executor.junit import write_report
 from store.jobs import Batch, BatchOptions
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState
-from store.variant_lookup import variant_assignments
+from store.variant_lookup import variant_infos
 
 REPORT_FILE = "test.xml"
 
@@ -192,8 +192,8 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     report too, as errors (stopped while running) or skipped (not started).
     """
     check_report_path(path)
-    assignments = variant_assignments(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
-    xml_text = merged_report(store.iter_results(batch.id), assignments, interrupted=interrupted)
+    variants = variant_infos(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
+    xml_text = merged_report(store.iter_results(batch.id), variants, interrupted=interrupted)
     try:
         write_report(path, xml_text)
     except OSError as exc:

@@ -1,6 +1,6 @@
 """``status``: counts per state, running jobs per worker and host, and an ETA, for people or scripts.
 
-A rich table on a terminal, plain aligned text otherwise (or with ``NO_COLOR``).
+A rich table on a terminal (without colours under ``NO_COLOR``), plain aligned text otherwise.
 """
 
 from __future__ import annotations

@@ -1,9 +1,10 @@
 """Judging one attempt: from how the child ended and the test.xml it wrote to a job state and a reason.
 
 A job passes when its process exits 0 and its test.xml has testcases and no failure or error;
-``ignore_return_value`` judges by test.xml alone. No readable test.xml, a death by signal and a
-timeout are infrastructure errors (``error``/``timeout``) that ``--retries`` may repeat; a scenario
-that ran and failed is ``failed`` and never repeated.
+``ignore_return_value`` judges by test.xml alone. No readable test.xml, a death by signal, a
+non-zero exit although test.xml passed, and a timeout are infrastructure errors (``error`` /
+``timeout``) that ``--retries`` may repeat; a scenario that ran and failed is ``failed`` and never
+repeated.
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from executor.batch.junit_read import CaseRecord, JunitUnreadable, clean_text, has_problem, read_cases
+from executor.batch.junit_read import JunitUnreadable, clean_text, has_problem, read_cases
+from executor.junit_document import Case
 from executor.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState
@@ -55,7 +57,7 @@ def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
     return clean_text(text)
 
 
-def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[CaseRecord], str | None]:
+def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[Case], str | None]:
     """The test.xml the attempt wrote (text or None, its testcases) and why it cannot be used (None if it can)."""
     if not mark.changed(path):
         return None, [], "no test.xml written"
@@ -91,9 +93,9 @@ def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_r
     elif has_problem(cases):
         status, reason = JobState.FAILED, "test.xml reports a failure"
     elif outcome.signal_name and not ignore_return_value:
-        status, reason = JobState.ERROR, f"killed by {outcome.signal_name}"
+        status, reason = JobState.ERROR, f"killed by {outcome.signal_name} although its test.xml passed"
     elif rc != 0 and not ignore_return_value:
-        status, reason = JobState.FAILED, f"exit code {rc}"
+        status, reason = JobState.ERROR, f"exit code {rc} although its test.xml passed"
     else:
         status, reason = JobState.PASSED, None
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,

@@ -55,7 +55,17 @@ def build_tree(scenario: Scenario, context: ScenarioContext) -> py_trees.behavio
 
 
 def build_behavior(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
-    """One model behaviour (and everything below it) as a py_trees behaviour."""
+    """One model behaviour (and everything below it) as a py_trees behaviour.
+
+    Each behaviour keeps the location of what it was built from in ``osc_location``, so a failure
+    can say where in the scenario it happened.
+    """
+    behaviour = _build(node, context)
+    behaviour.osc_location = getattr(node, "location", None)
+    return behaviour
+
+
+def _build(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
     if isinstance(node, Composite):
         if node.kind == "serial":
             composite = py_trees.composites.Sequence(name=node.name, memory=True)

@@ -101,6 +101,22 @@ def _load(request: ExecutionRequest, logger: Logger):
     return loaded
 
 
+def report_names(scenario: str, runs=()):
+    """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header)."""
+    from executor.junit import report_names as names_for
+
+    variant = None
+    if scenario.endswith(".sce"):
+        from coverage_engine.sce import read_sce
+
+        try:
+            document = read_sce(scenario)
+            variant = (document.source, document.scenario, document.assignment)
+        except OscError:
+            variant = None
+    return names_for(scenario, [(run.name, run.scenario.name) for run in runs], variant)
+
+
 def execute(request: ExecutionRequest) -> int:
     """Do everything the command does; returns the exit code."""
     logger = Logger("scenario_execution", debug=request.debug)
@@ -134,7 +150,8 @@ def execute(request: ExecutionRequest) -> int:
         if output_root and not request.dry_run:
             from executor.junit import parse_error_result, write_results
 
-            write_results(output_root, [parse_error_result(request.scenario, exc.message, str(exc))])
+            write_results(output_root, [parse_error_result(request.scenario, exc.message, str(exc))],
+                          report_names(request.scenario))
         raise
 
     if request.log_model:
@@ -157,6 +174,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     model_dirs = [d for scenario_file, _ in loaded for d in scenario_file.search_paths]
     add_import_paths([os.getcwd(), scenario_dir, *model_dirs])
     runs = plan_runs(loaded, output_root)
+    names = report_names(request.scenario, runs) if output_root else None
     if not runs:
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED
@@ -174,7 +192,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
                 from executor.runtime.results import ScenarioResult
 
                 write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
-                              output_root, request.per_scenario)
+                              output_root, request.per_scenario, names)
             raise UsageProblem(str(exc)) from exc
 
     if request.dot:
@@ -191,7 +209,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     if output_root:
         from executor.junit import ReportWriter
 
-        report = ReportWriter(output_root, request.per_scenario)
+        report = ReportWriter(output_root, request.per_scenario, names)
     options = SessionOptions(tick_period=request.step_duration, simulation=simulation, input_dir=scenario_dir,
                              output_root=output_root, debug=request.debug,
                              observer_factory=live.observers if live else None,

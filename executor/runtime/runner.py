@@ -46,6 +46,23 @@ def describe_error(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
+def _leaf_with(root: py_trees.behaviour.Behaviour, status: Status):
+    """The first behaviour in tick order with ``status`` none of whose children has it (where it happened)."""
+    for node in root.iterate():                      # children come before their parent
+        if node.status is status and not any(child.status is status for child in node.children):
+            return node
+    return None
+
+
+def where(root: py_trees.behaviour.Behaviour | None, status: Status) -> tuple[str, str]:
+    """``("'name' (file:line:col)", feedback)`` of the behaviour that has ``status`` (``("", "")`` if none)."""
+    node = None if root is None else _leaf_with(root, status)
+    if node is None or node is root:
+        return "", ""
+    location = getattr(node, "osc_location", None)
+    return f"'{node.name}'" + (f" ({location})" if location else ""), node.feedback_message or ""
+
+
 class ScenarioRunner:
     """Runs one scenario: build, set up, tick, tear down."""
 
@@ -166,14 +183,17 @@ class ScenarioRunner:
             status = self._tick_loop()
             result.passed = status is Status.SUCCESS
             if not result.passed:
-                result.message = "the scenario's behaviour tree failed"
+                failed, why = where(self.root, Status.FAILURE)
+                result.message = (f"{failed} failed" + (f": {why}" if why else "")) if failed else \
+                    "the scenario's behaviour tree failed"
         except ScenarioEnd as end:
             result.passed = end.success
             result.message = "" if end.success else end.message
             _mark_path(end.behaviour, Status.SUCCESS if end.success else Status.FAILURE)
         except (Aborted, KeyboardInterrupt) as exc:
             signum = exc.signum if isinstance(exc, Aborted) else 2
-            result.message = "aborted"
+            running = where(self.root, Status.RUNNING)[0] if ticking else ""
+            result.message = f"aborted by {_signal_name(signum)}" + (f" while {running} ran" if running else "")
             result.aborted = True
         except Exception as exc:  # noqa: BLE001 - anything raised by actions, expressions or plugins
             result.message = describe_error(exc) if ticking else f"setup failed: {describe_error(exc)}"
@@ -193,6 +213,15 @@ class ScenarioRunner:
         if signum:
             raise RunAborted(result, signum)
         return result
+
+
+def _signal_name(signum: int) -> str:
+    import signal
+
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
 
 
 def _mark_path(behaviour, status: Status) -> None:

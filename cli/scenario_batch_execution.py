@@ -3,7 +3,7 @@
 Thin click commands: options are parsed here, the work is done by :mod:`executor.batch`, and errors
 become one line on stderr and an exit code (a traceback only with ``-d/--debug``).
 
-    scenario_batch_execution -i DIR -o OUT [options] -- CMD … {SCENARIO} … {OUTPUT_DIR} …
+    scenario_batch_execution -i DIR -o OUT [options] [-- CMD … {SCENARIO} … {OUTPUT_DIR} …]
     scenario_batch_execution worker|status|report --store URL …
 
 The first argument selects a subcommand only when it is exactly ``worker``, ``status`` or ``report``,
@@ -168,6 +168,9 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
                 ignore_rc, post_run, enqueue_only, lease, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
+    Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
+    {OUTPUT_DIR}' would, forked from a process that has the runtime loaded (much faster).
+
     Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
     """
     from executor.batch import runner
@@ -176,7 +179,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
 
     if not resume and input_dir is None:
         raise click.UsageError("missing -i/--input-dir")
-    if not resume or command:
+    if command:                  # none: the built-in runner (scenario_execution forked, not launched)
         _check_command(command)
     _check_post_run(post_run)
     request = runner.BatchRequest(
@@ -231,7 +234,7 @@ def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_fo
             store.batch(batch_id)
         settings = WorkerSettings(slots=slots, batch_id=batch_id, lease=lease, poll=poll,
                                   output_root=os.path.abspath(output_root) if output_root else None,
-                                  wait_for_work=wait_for_work, cwd=os.getcwd(), die_with_parent=True)
+                                  wait_for_work=wait_for_work, cwd=os.getcwd())
         summary, signum = run_worker(store, settings, PlainReporter())
     finally:
         store.close()

@@ -379,14 +379,27 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
         index=index, parameters=parameters, path=path, extra=extra)
 
 
+#: The last few files read, by path and identity (size, modification time, inode): a run reads its
+#: ``.sce`` twice (to load it and to name its report), and parsing YAML is the costly part.
+_recent: dict[tuple, SceDocument] = {}
+
+
 def read_sce(path: str | os.PathLike) -> SceDocument:
     """Load a ``.sce`` file written by ``scenario_variation`` (see the module docstring for the format)."""
     path = str(path)
     try:
         with open(path, encoding="utf-8") as handle:
+            stat = os.fstat(handle.fileno())
+            key = (path, stat.st_size, stat.st_mtime_ns, stat.st_ino)
+            if key in _recent:
+                return _recent[key]
             text = handle.read()
     except FileNotFoundError as exc:
         raise SceFormatError(f"{path}: no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise SceFormatError(f"{path}: cannot read .sce file: {exc}") from exc
-    return parse_sce(text, path)
+    document = parse_sce(text, path)
+    if len(_recent) >= 4:
+        _recent.clear()
+    _recent[key] = document
+    return document

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import shlex
 import signal
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from executor.process import ChildProcess, kill_group
@@ -34,7 +34,8 @@ def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Pa
                    cancelled: Callable[[], bool] | None = None,
                    track: Callable[[ChildProcess | None], None] | None = None,
                    announce: Callable[[str], None] | None = None,
-                   report: Callable[[str], None] | None = None) -> list[str]:
+                   report: Callable[[str], None] | None = None,
+                   environment: Mapping[str, str] | None = None) -> list[str]:
     """Run every hook on ``output_dir``; returns one message per hook that failed (each also to ``report``).
 
     ``log_path``: append each hook's command line and output to this file (else they share the terminal).
@@ -42,6 +43,7 @@ def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Pa
     ``track``: called with each hook's process before it starts and with None after it ended, so another
     thread can :meth:`ChildProcess.cancel` it (a cancel before the start means it never starts).
     ``announce``: called with the command line before each hook starts.
+    ``environment``: variables set for the hooks on top of this process's.
     """
     problems: list[str] = []
 
@@ -64,7 +66,7 @@ def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Pa
             with open(log_path, "ab") as log:
                 log.write(f"$ {shlex.join(argv)}\n".encode())
         child = ChildProcess(argv, None if log_path is None else str(log_path), cwd=cwd, timeout=timeout,
-                             grace=grace, append=True)
+                             grace=grace, append=True, environment=environment)
         if track is not None:
             track(child)
         try:

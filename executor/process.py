@@ -11,53 +11,24 @@ left of the group when the child exits is killed too.
 
 from __future__ import annotations
 
-import ctypes
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import BinaryIO
+from typing import Any, BinaryIO, Protocol
 
 _CHUNK = 64 * 1024
 
 
-def _load_prctl():
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        return ctypes.CDLL(None, use_errno=True).prctl
-    except (OSError, AttributeError):
-        return None
+class Launcher(Protocol):
+    """Starts a command some other way than ``exec`` (the built-in runner forks it from a warm server)."""
 
-
-_PRCTL = _load_prctl()
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with(parent: int):
-    """On Linux, a function for the child to run before exec: die (SIGKILL) when ``parent`` dies.
-
-    So a kill -9 of a worker does not leave its children running (their grandchildren are ended by
-    the next sweep on this host, which knows the process groups from the store). If the parent died
-    between fork and this call the signal would never come, so the child checks and ends itself.
-    It costs a real fork instead of vfork (measured 4-6 ms per child: 1.12-1.15x a shell loop in
-    ``benchmarks/bench_batch_overhead.py``, over its 1.1x goal), so the single-host run leaves it off
-    and relies on ``--resume`` ending the orphaned process groups it finds in the store.
-    """
-    if _PRCTL is None:
-        return None
-    prctl = _PRCTL
-
-    def preexec() -> None:
-        prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-        if os.getppid() != parent:
-            os.kill(os.getpid(), signal.SIGKILL)
-
-    return preexec
+    def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], output_fd: int,
+              stdout: BinaryIO | None = None) -> Any:
+        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``; a Popen-like object."""
 
 
 @dataclass(frozen=True)
@@ -106,14 +77,21 @@ def group_alive(pgid: int) -> bool:
 #: Environment variable set for every job's child: ``<job id>.<attempt>``; it also marks the process group.
 JOB_ENV = "SCENARIO_BATCH_JOB"
 
+#: Environment variable set for every process a runner starts: the runner's worker id (see the watchdog).
+RUNNER_ENV = "SCENARIO_BATCH_RUNNER"
 
-def end_orphan_group(pgid: int, marker: str) -> bool:
-    """SIGKILL process group ``pgid`` if one of its processes carries ``JOB_ENV=marker``.
+
+def end_orphan_group(pgid: int, marker: str, runner: str | None = None) -> bool:
+    """SIGKILL process group ``pgid`` if one of its processes carries ``JOB_ENV=marker`` (or, for a job of
+    the built-in runner, whose marker is set after the fork, ``RUNNER_ENV=runner``).
 
     A recorded process id may have been reused by an unrelated process by the time a dead runner's
-    jobs are taken back, so the group is ended only when it provably belongs to that job's attempt.
+    jobs are taken back, so the group is ended only when it provably belongs to that job's attempt
+    (or to the dead runner: its worker id is unique).
     """
-    wanted = f"{JOB_ENV}={marker}".encode()
+    wanted = {f"{JOB_ENV}={marker}".encode()}
+    if runner:
+        wanted.add(f"{RUNNER_ENV}={runner}".encode())
     try:
         entries = os.listdir("/proc")
     except OSError:
@@ -127,7 +105,7 @@ def end_orphan_group(pgid: int, marker: str) -> bool:
             if int(fields[2]) != pgid:
                 continue
             with open(f"/proc/{entry}/environ", "rb") as handle:
-                if wanted in handle.read().split(b"\0"):
+                if wanted.intersection(handle.read().split(b"\0")):
                     return kill_group(pgid)
         except (OSError, IndexError, ValueError):
             continue
@@ -139,7 +117,8 @@ class ChildProcess:
 
     def __init__(self, argv: Sequence[str], log_path: str | None, *, cwd: str | None = None,
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
-                 die_with_parent: bool = False, marker: str | None = None, append: bool = False) -> None:
+                 marker: str | None = None, environment: Mapping[str, str] | None = None,
+                 append: bool = False, launcher: Launcher | None = None) -> None:
         self.argv = list(argv)
         self.log_path = log_path               # None: stdin, stdout and stderr are this process's
         self.append = append
@@ -147,8 +126,11 @@ class ChildProcess:
         self.timeout = timeout
         self.grace = grace
         self.echo = echo
-        self.die_with_parent = die_with_parent
-        self.env = None if marker is None else {**os.environ, JOB_ENV: marker}
+        self.launcher = launcher               # None: exec argv; else the launcher forks it (built-in runner)
+        self.extra_env = dict(environment or {})
+        if marker is not None:
+            self.extra_env[JOB_ENV] = marker
+        self.env = {**os.environ, **self.extra_env} if self.extra_env else None
         self.proc: subprocess.Popen[bytes] | None = None
         self._lock = threading.Lock()
         self._timers: list[threading.Timer] = []
@@ -172,6 +154,9 @@ class ChildProcess:
                 return None
             if self.log_path is None:
                 self.proc = self._spawn(None, None)
+            elif self.launcher is not None:
+                with open(self.log_path, "ab" if self.append else "wb") as log:
+                    self.proc = self._fork(log)
             else:
                 with open(self.log_path, "ab" if self.append else "wb") as log:
                     self.proc = self._spawn(subprocess.DEVNULL,
@@ -184,8 +169,23 @@ class ChildProcess:
         return subprocess.Popen(
             self.argv, cwd=self.cwd, stdin=stdin, stdout=stdout,
             stderr=None if stdout is None else subprocess.STDOUT,
-            env=self.env, start_new_session=True, close_fds=True,
-            preexec_fn=die_with(os.getpid()) if self.die_with_parent else None)
+            env=self.env, start_new_session=True, close_fds=True)
+
+    def _fork(self, log):
+        """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""
+        assert self.launcher is not None
+        if self.echo is None:
+            return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
+                                       output_fd=log.fileno())
+        read_end, write_end = os.pipe()
+        try:
+            return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
+                                       output_fd=write_end, stdout=os.fdopen(read_end, "rb"))
+        except BaseException:
+            os.close(read_end)
+            raise
+        finally:
+            os.close(write_end)
 
     def wait(self) -> ProcessOutcome:
         """Block until the child exits (copying its output when echoing); end what is left of its group.

@@ -140,3 +140,43 @@ def alive(pid: int) -> bool:
             return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
     except OSError:
         return False
+
+
+def children_of(pid: int) -> list[tuple[int, bytes]]:
+    """``(pid, command line)`` of the processes whose parent is ``pid``."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as handle:
+                parent = int(handle.read().rsplit(b")", 1)[1].split()[1])
+            if parent == pid:
+                with open(f"/proc/{entry}/cmdline", "rb") as handle:
+                    found.append((int(entry), handle.read()))
+        except (OSError, ValueError, IndexError):
+            continue
+    return found
+
+
+def watchdog_of(runner: int) -> int:
+    """The process id of the watchdog the runner ``runner`` started."""
+    found = [pid for pid, cmdline in children_of(runner) if b"watchdog.py" in cmdline]
+    assert len(found) == 1, children_of(runner)
+    return found[0]
+
+
+def marked(mark: str) -> list[int]:
+    """Processes whose environment holds ``mark`` (``NAME=value``): what a runner started, still alive."""
+    wanted = mark.encode()
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/environ", "rb") as handle:
+                if wanted in handle.read().split(b"\0") and alive(int(entry)):
+                    found.append(int(entry))
+        except OSError:
+            continue
+    return found

@@ -70,7 +70,6 @@ def test_user_errors_are_one_line_without_traceback(tmp_path):
         ["-i", "in", "-o", "r", "--", sys.executable, str(child), "in/a.sce", "x"],       # no placeholders
         ["-i", "empty", "-o", "r", "--", *child_command(child)],                          # no scenario files
         ["-i", "missing", "-o", "r", "--", *child_command(child)],
-        ["-i", "in", "-o", "r"],                                                          # no command
         ["-i", "in", "-o", "r", "--shard", "3/2", "--", *child_command(child)],
         ["-i", "in", "-o", "r", "-j", "zero", "--", *child_command(child)],
         ["-i", "in", "-o", "r", "--bogus", "--", *child_command(child)],
@@ -96,8 +95,6 @@ def test_exit_codes_usage_2_runtime_1(tmp_path):
     usage = [
         ["-i", "in", "-o", "r", "--", sys.executable, str(child), "{SCENARIO}"],          # no {OUTPUT_DIR}
         ["-i", "in", "-o", "r", "--", sys.executable, str(child), "{OUTPUT_DIR}"],        # no {SCENARIO}
-        ["-i", "in", "-o", "r"],                                                          # no command
-        ["-i", "in", "-o", "r", "--"],
         ["-o", "r", "--", *cmd],                                                          # no -i
         ["-i", "in", "-o", "r", "--shard", "0/3", "--", *cmd],
         ["-i", "in", "-o", "r", "--shard", "x", "--", *cmd],

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import time
 import xml.etree.ElementTree as ET
@@ -14,6 +15,7 @@ from batch_fixtures import (
     ledger,
     run_cli,
     start_cli,
+    watchdog_of,
     write_child,
     write_scenarios,
 )
@@ -177,7 +179,7 @@ def test_resume_of_a_finished_batch_rewrites_the_report(tmp_path):
     assert other.returncode == 1 and "different command" in other.stderr
 
 
-def test_resume_ends_the_process_group_a_killed_runner_left_behind(tmp_path):
+def test_resume_ends_the_process_group_a_killed_runner_and_watchdog_left_behind(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"orphan": "grandchild=1\nslow_first=60"})
     env = cli_env(tmp_path)
@@ -188,7 +190,10 @@ def test_resume_ends_the_process_group_a_killed_runner_left_behind(tmp_path):
         assert time.monotonic() < deadline and proc.poll() is None
         time.sleep(0.02)
     time.sleep(0.3)                                               # the child's pid reaches the store
+    # the runner and its watchdog both die at once (as when the OOM killer takes the whole group)
+    watchdog = watchdog_of(proc.pid)
     proc.send_signal(signal.SIGKILL)
+    os.kill(watchdog, signal.SIGKILL)
     proc.communicate(timeout=10)
     orphans = [int((job_dir / name).read_text()) for name in ("child.pid", "grandchild.pid")]
     assert all(alive(pid) for pid in orphans)                    # nobody ended them yet

@@ -10,14 +10,16 @@ from __future__ import annotations
 import queue
 import threading
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
+from executor.batch.builtin_runner import BUILTIN_COMMAND
 from executor.batch.inputs import substitute
 from executor.batch.verdict import LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
 from executor.hooks import run_post_hooks
-from executor.process import ChildProcess
+from executor.process import ChildProcess, Launcher
 from store.jobs import Batch, Job, JobResult
 from store.states import NOT_STARTED_REASON, JobState
 
@@ -60,7 +62,7 @@ class JobRun:
 
     def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
                  events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None,
-                 die_with_parent: bool = False) -> None:
+                 environment: Mapping[str, str] | None = None, launcher: Launcher | None = None) -> None:
         self.job = job
         self.batch = batch
         self.output_dir = output_dir
@@ -68,7 +70,8 @@ class JobRun:
         self.events = events
         self.cwd = cwd
         self.echo = echo
-        self.die_with_parent = die_with_parent
+        self.environment = dict(environment or {})   # for the job's and its hooks' processes (the runner's mark)
+        self.launcher = launcher                     # the built-in runner's fork server, for batches without a command
         self.lost = False                     # set when the lease was taken over: the result is dropped
         self._child: ChildProcess | None = None    # the job's child, then each post-run hook's in turn
         self._lock = threading.Lock()
@@ -119,10 +122,13 @@ class JobRun:
         self.output_dir.mkdir(parents=True, exist_ok=True)
         rotate_log(self.output_dir, self.job.attempts)
         mark = FileMark.of(self.output_dir / RESULT_FILE)
-        argv = substitute(self.batch.command, self.scenario_path, str(self.output_dir))
+        if not self.batch.command and self.launcher is None:
+            raise OSError("the built-in runner is not available")
+        argv = substitute(self.batch.command or BUILTIN_COMMAND, self.scenario_path, str(self.output_dir))
         child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
-                             grace=options.grace, echo=self.echo, die_with_parent=self.die_with_parent,
-                             marker=job_marker(self.job.id, self.job.attempts))
+                             grace=options.grace, echo=self.echo, environment=self.environment,
+                             marker=job_marker(self.job.id, self.job.attempts),
+                             launcher=None if self.batch.command else self.launcher)
         with self._lock:
             if self._cancel_grace is not None:
                 now = time.time()
@@ -135,6 +141,6 @@ class JobRun:
         if options.post_run and not outcome.cancelled:
             problems.extend(run_post_hooks(options.post_run, self.output_dir, log_path=self.output_dir / HOOK_LOG,
                                            cwd=self.cwd, grace=options.grace, cancelled=self._cancel_requested,
-                                           track=self._track))
+                                           track=self._track, environment=self.environment))
         return judge(outcome, self.output_dir, mark, ignore_return_value=options.ignore_return_value,
                      timeout=options.timeout)

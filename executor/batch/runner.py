@@ -67,7 +67,8 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
     if request.input_dir is None:
         raise BatchError("-i/--input-dir is required (except with --resume)")
     files = discover(request.input_dir)
-    check_command(request.command, require_executable=mode == "local")
+    if request.command:                  # an empty command: the built-in runner
+        check_command(request.command, require_executable=mode == "local")
     specs = job_specs(files, request.shard)
     options = request.options
     if request.shard is not None:

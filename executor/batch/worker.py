@@ -19,10 +19,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
+from executor.batch.builtin_runner import ForkServer, ForkServerError
 from executor.batch.job_run import Done, JobRun, Started, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import launch_failure
-from executor.process import end_orphan_group
+from executor.batch.watchdog import Watchdog
+from executor.process import RUNNER_ENV, end_orphan_group
 from store.database import StoreError
 from store.jobs import Batch, Job, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
@@ -48,7 +50,7 @@ class WorkerSettings:
     wait_for_work: bool = False          # keep waiting for new batches instead of ending when idle
     echo: BinaryIO | None = None         # copy the children's output here (``-j 1``)
     cwd: str | None = None
-    die_with_parent: bool = False        # children get SIGKILL when this process dies (costs a fork)
+    watchdog: bool = True                # every process this worker starts dies with it, even after kill -9
 
 
 @dataclass
@@ -103,6 +105,7 @@ class Worker:
         self._warned_unavailable = False
         self._started = 0
         self._unsure_claims = False
+        self._fork_server: ForkServer | None = None
 
     # ------------------------------------------------------------------ control
     def stop(self, force: bool = False) -> None:
@@ -115,8 +118,10 @@ class Worker:
         """The loop; returns when no work is left, or after a stop once every running job has ended.
 
         Should the loop itself fail, the running children are killed before the error propagates (their
-        jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone).
+        jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone). Should
+        this process die (``kill -9``), its watchdog ends every process it started.
         """
+        watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
         try:
             return self._loop()
         except BaseException:
@@ -125,6 +130,26 @@ class Worker:
             for run in list(self._runs.values()):
                 run.join(timeout=5.0)
             raise
+        finally:
+            if self._fork_server is not None:
+                self._fork_server.close()
+                self._fork_server = None
+            if watchdog is not None:
+                watchdog.release()
+
+    @property
+    def mark(self) -> str:
+        """``RUNNER_ENV=<worker id>``: the environment entry of every process this worker starts."""
+        return f"{RUNNER_ENV}={self.identity.id}"
+
+    def _launcher(self) -> ForkServer:
+        """The built-in runner's fork server, started on the first job that needs it (again if it ended)."""
+        if self._fork_server is None or not self._fork_server.alive:
+            if self._fork_server is not None:
+                self._fork_server.close()
+                self._fork_server = None
+            self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id}).start()
+        return self._fork_server
 
     def _loop(self) -> WorkerSummary:
         beat_every = max(0.05, self.settings.lease / 4)
@@ -236,9 +261,15 @@ class Worker:
                 f": {exc.filename}" if exc.filename else "")
         except Exception as exc:  # noqa: BLE001 - one job that cannot be prepared must not end the loop
             scenario, problem = job.scenario_path, f"cannot prepare the job: {exc!r}"
+        launcher = None
+        if problem is None and not batch.command:
+            try:
+                launcher = self._launcher()
+            except ForkServerError as exc:
+                problem = str(exc)
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
                      echo=self.settings.echo if self.settings.slots == 1 else None,
-                     die_with_parent=self.settings.die_with_parent)
+                     environment={RUNNER_ENV: self.identity.id}, launcher=launcher)
         self._runs[job.id] = run
         self._started += 1
         self.reporter.job_started(job)
@@ -294,7 +325,7 @@ class Worker:
         for item in reclaimed:
             if item.child_pid and self.identity.same_node(item.worker_id) and item.worker_id != self.identity.id:
                 # the orphaned child of a dead runner must not run on (if that group is still it)
-                end_orphan_group(item.child_pid, job_marker(item.job_id, item.attempt))
+                end_orphan_group(item.child_pid, job_marker(item.job_id, item.attempt), item.worker_id)
         if reclaimed:
             self._claim_more = True
 

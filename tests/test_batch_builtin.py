@@ -1,0 +1,238 @@
+"""The built-in runner (no launch command; issue 14) through the real CLI, and no orphans after kill -9.
+
+The scenarios are variants made by the real ``scenario_variation`` of a file whose external method
+(``probe_mod.record``) lives in the scenario's folder: it records, per call, the job's name, the
+process it ran in, its parent, how often the module was called in that process, and whether a
+global that an earlier job changed is still changed — so the tests see where user code ran and
+whether one job's state reached the next.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
+from tests_schema import assert_valid
+
+pytest_plugins = ["batch_stores"]            # the pg_url fixture
+
+BIN = Path(sys.executable).parent
+
+PROBE_MODULE = '''
+import os, signal, sys, time
+CALLS = []
+IMPORTED_IN = os.getpid()
+
+def record(name, pause):
+    CALLS.append(name)
+    time.sleep(pause)
+    import executor.junit as junit
+    leaked = getattr(junit, "LEAKED_BY", "-")
+    junit.LEAKED_BY = name                      # global state a later job must never see
+    line = "%s %d %d %d %d %s\\n" % (name, os.getpid(), os.getppid(), IMPORTED_IN, len(CALLS), leaked)
+    fd = os.open(os.environ["BATCH_LEDGER"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    os.write(fd, line.encode())
+    os.close(fd)
+    if name == "crash":
+        os.kill(os.getpid(), signal.SIGSEGV)
+    if name == "hang":
+        time.sleep(60)
+    return name
+'''
+
+
+def scenario(names: list[str], pause: float) -> str:
+    listed = ", ".join(f'"{n}"' for n in names)
+    return f"""import osc.helpers
+
+struct probe:
+    def record(name: string, pause: float) -> string is external probe_mod.record()
+
+scenario job:
+    name: string = "x"
+    keep(name in [{listed}])
+    do serial:
+        log(probe.record(name, {pause}))
+        check: compare(left_value: name, operator: "!=", right_value: "fail")
+"""
+
+
+def make_variants(root: Path, names: list[str], pause: float = 0.0) -> dict[str, str]:
+    """Variants ``job0…`` of the probe scenario in ``root/out``; returns the cli environment."""
+    (root / "src").mkdir(parents=True)
+    (root / "src" / "probe_mod.py").write_text(PROBE_MODULE)
+    (root / "src" / "job.osc").write_text(scenario(names, pause))
+    env = cli_env(root)
+    made = subprocess.run([str(BIN / "scenario_variation"), "src/job.osc", "-o", "out"], cwd=root, env=env,
+                          capture_output=True, text=True)
+    assert made.returncode == 0, made.stdout + made.stderr
+    return env
+
+
+def records(root: Path) -> list[list[str]]:
+    path = root / "ledger.txt"
+    return [line.split() for line in path.read_text().splitlines()] if path.exists() else []
+
+
+def _normal(xml_text: str) -> bytes:
+    """A report without what may differ between two runs: times, host, output folder."""
+    root = ET.fromstring(xml_text.encode())
+    for element in root.iter():
+        for key in ("time", "timestamp", "hostname"):
+            element.attrib.pop(key, None)
+        if element.tag == "property" and element.get("name") in ("output_dir", "host"):
+            element.set("value", "-")
+    return ET.tostring(root)
+
+
+def test_builtin_and_launched_runs_give_the_same_results(tmp_path):
+    names = [f"n{i}" for i in range(48)] + ["fail", "crash"]
+    env = make_variants(tmp_path, names)
+    builtin = run_cli(["-i", "out", "-o", "builtin", "-j", "2"], tmp_path, env)
+    launched = run_cli(["-i", "out", "-o", "launched", "-j", "2", "--", str(BIN / "scenario_execution"),
+                        "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"], tmp_path, env)
+    assert builtin.returncode == launched.returncode == 1, builtin.stdout + builtin.stderr
+    merged = (tmp_path / "builtin/test.xml").read_text()
+    assert_valid(merged)
+    assert _normal(merged) == _normal((tmp_path / "launched/test.xml").read_text())
+    root = ET.fromstring(merged.encode())
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("50", "1", "1")
+    crashed = root.find(".//testsuite[@name='job49']/testcase/error")
+    assert crashed.get("message").startswith("no test.xml written (killed by SIGSEGV)")
+    for index in range(50):
+        one, other = tmp_path / "builtin" / f"job{index}", tmp_path / "launched" / f"job{index}"
+        assert sorted(p.name for p in one.iterdir()) == sorted(p.name for p in other.iterdir())
+        assert (one / "log.txt").read_bytes() == (other / "log.txt").read_bytes(), index
+        if (one / "test.xml").exists():
+            assert _normal((one / "test.xml").read_text()) == _normal((other / "test.xml").read_text())
+    # user code ran in each job, never in the parent: imported there, called once, saw no other job's state
+    ledger = records(tmp_path)
+    assert len(ledger) == 100
+    for name, pid, _parent, imported_in, calls, leaked in ledger:
+        assert imported_in == pid and calls == "1" and leaked == "-", (name, pid, imported_in, calls, leaked)
+    forked = ledger[:50]
+    parents = {row[2] for row in forked}
+    assert len(parents) == 1 and all(not alive(int(p)) for p in parents)   # one fork server, gone at the end
+
+
+def test_builtin_timeout_retries_post_run_and_a_hanging_job(tmp_path):
+    env = make_variants(tmp_path, ["a", "hang", "b"])
+    hook = tmp_path / "hook.sh"
+    hook.write_text('#!/bin/sh\necho "hook $1" >> "$BATCH_LEDGER.hooks"\n')
+    hook.chmod(0o755)
+    start = time.monotonic()
+    done = run_cli(["-i", "out", "-o", "res", "-j", "2", "--timeout", "3", "--grace", "0.5", "--retries", "1",
+                    "--post-run", str(hook)], tmp_path, env)
+    assert time.monotonic() - start < 30
+    assert done.returncode == 1, done.stdout + done.stderr
+    root = ET.parse(tmp_path / "res/test.xml").getroot()
+    errors = root.findall(".//error")
+    assert [e.get("type") for e in errors] == ["timeout"] and errors[0].get("message") == "timed out after 3 s"
+    by_name = {}
+    for name, *_ in records(tmp_path):
+        by_name[name] = by_name.get(name, 0) + 1
+    assert by_name == {"a": 1, "hang": 2, "b": 1}                 # the timeout was retried once
+    hooks = (tmp_path / "ledger.txt.hooks").read_text().splitlines()
+    assert sorted(hooks) == sorted(f"hook {tmp_path / 'res' / f'job{i}'}" for i in (0, 1, 1, 2))
+    assert (tmp_path / "res/job1/log.1.txt").exists()             # the first attempt's log is kept
+
+
+def test_builtin_shard_and_resume_need_no_command(tmp_path):
+    names = [f"s{i}" for i in range(8)]
+    env = make_variants(tmp_path, names)
+    first = run_cli(["-i", "out", "-o", "one", "--shard", "1/2"], tmp_path, env)
+    second = run_cli(["-i", "out", "-o", "two", "--shard", "2/2"], tmp_path, env)
+    assert first.returncode == second.returncode == 0, first.stdout + first.stderr
+    suites = [s.get("name") for path in ("one", "two") for s in ET.parse(tmp_path / path / "test.xml").iter(
+        "testsuite")]
+    assert sorted(suites) == sorted(f"job{i}" for i in range(8))
+    again = run_cli(["-o", "one", "--resume"], tmp_path, env)
+    assert again.returncode == 0 and len(records(tmp_path)) == 8       # nothing ran twice
+
+
+def _worker_id(store: Path) -> str:
+    with sqlite3.connect(store) as conn:
+        row = conn.execute("SELECT worker_id FROM jobs WHERE worker_id IS NOT NULL LIMIT 1").fetchone()
+    return row[0]
+
+
+@pytest.mark.parametrize("launched", [False, True], ids=["builtin", "launched"])
+def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, launched):
+    names = [f"k{i}" for i in range(40)]
+    env = make_variants(tmp_path, names, pause=0.3)
+    command = ["--", str(BIN / "scenario_execution"), "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"] if launched \
+        else []
+    runner = start_cli(["-i", "out", "-o", "res", "-j", "2", *command], tmp_path, env)
+    deadline = time.monotonic() + 60
+    while len(records(tmp_path)) < 6:
+        assert time.monotonic() < deadline and runner.poll() is None, runner.stdout.read()
+        time.sleep(0.02)
+    mark = f"SCENARIO_BATCH_RUNNER={_worker_id(tmp_path / '.scenario_store.db')}"
+    assert marked(mark), "the batch's processes carry the runner's mark"
+    runner.send_signal(signal.SIGKILL)
+    runner.communicate(timeout=10)
+    killed_at = time.monotonic()
+    while marked(mark):
+        assert time.monotonic() - killed_at < 3, f"alive 3 s after kill -9: {marked(mark)}"
+        time.sleep(0.05)
+    finished = _finished_jobs(tmp_path)
+    assert 0 < len(finished) < 40
+
+    resumed = run_cli(["-o", "res", "--resume", "-j", "2"], tmp_path, env, timeout=120)
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    suites = [s.get("name") for s in ET.parse(tmp_path / "res/test.xml").iter("testsuite")]
+    assert suites == [f"job{i}" for i in range(40)]                  # every job has one result, in order
+    runs: dict[str, int] = {}
+    for name, *_ in records(tmp_path):
+        runs[name] = runs.get(name, 0) + 1
+    assert set(runs) == set(names)
+    assert all(runs[f"k{int(job[3:])}"] == 1 for job in finished), "a finished job ran again"
+
+
+def _finished_jobs(root: Path) -> set[str]:
+    """Jobs with a verdict in the store (a resume must not run them again)."""
+    with sqlite3.connect(root / ".scenario_store.db") as conn:
+        rows = conn.execute("SELECT name FROM jobs WHERE status IN ('passed', 'failed', 'error', 'timeout')")
+        return {row[0] for row in rows}
+
+
+def test_worker_subcommand_runs_builtin_batches_from_postgresql(pg_url, tmp_path):
+    env = make_variants(tmp_path, [f"w{i}" for i in range(6)])
+    enqueued = run_cli(["-i", "out", "-o", "res", "--store", pg_url, "--enqueue-only"], tmp_path, env)
+    assert enqueued.returncode == 0, enqueued.stdout + enqueued.stderr
+    workers = [start_cli(["worker", "--store", pg_url, "-j", "2", "--poll", "0.1"], tmp_path, env) for _ in range(2)]
+    for worker in workers:
+        out = worker.communicate(timeout=120)[0]
+        assert worker.returncode == 0, out
+    report = run_cli(["report", "--store", pg_url, "-o", "merged.xml"], tmp_path, env)
+    assert report.returncode == 0, report.stdout + report.stderr
+    assert_valid(tmp_path / "merged.xml")
+    assert sorted(row[0] for row in records(tmp_path)) == sorted(f"w{i}" for i in range(6))
+
+
+def test_ctrl_c_stops_builtin_jobs_and_resume_finishes(tmp_path):
+    env = make_variants(tmp_path, [f"c{i}" for i in range(6)], pause=1.0)
+    runner = start_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "res/job1/log.txt").exists() or "Executing" not in (
+            tmp_path / "res/job1/log.txt").read_text():
+        assert time.monotonic() < deadline and runner.poll() is None
+        time.sleep(0.02)
+    runner.send_signal(signal.SIGINT)
+    out = runner.communicate(timeout=30)[0]
+    assert runner.returncode == 130, out
+    root = ET.parse(tmp_path / "res/test.xml").getroot()
+    assert root.get("tests") == "6" and root.find(".//error[@type='cancelled']") is not None
+    log = (tmp_path / "res/job0/log.txt").read_text()
+    assert "aborted by SIGINT" in log                               # the job's own handler ran, as launched
+    resumed = run_cli(["-o", "res", "--resume", "-j", "2"], tmp_path, env, timeout=120)
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    assert os.path.exists(tmp_path / "res/job5/test.xml")

@@ -129,6 +129,7 @@ class JobResult:
     log_tail: str | None = field(default=None, repr=False)
     output_dir: str | None = None
     log_path: str | None = None
+    coverage_json: str | None = field(default=None, repr=False)   # the attempt's coverage.json (not stored yet)
 
     @property
     def duration(self) -> float:

@@ -17,7 +17,7 @@ from typing import BinaryIO
 
 from executor.batch.builtin_runner import BUILTIN_COMMAND
 from executor.batch.inputs import substitute
-from executor.batch.verdict import LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
+from executor.batch.verdict import COVERAGE_FILE, LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
 from executor.hooks import run_post_hooks
 from executor.process import ChildProcess, Launcher
 from store.jobs import Batch, Job, JobResult
@@ -122,6 +122,7 @@ class JobRun:
         self.output_dir.mkdir(parents=True, exist_ok=True)
         rotate_log(self.output_dir, self.job.attempts)
         mark = FileMark.of(self.output_dir / RESULT_FILE)
+        coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
         if not self.batch.command and self.launcher is None:
             raise OSError("the built-in runner is not available")
         argv = substitute(self.batch.command or BUILTIN_COMMAND, self.scenario_path, str(self.output_dir))
@@ -143,4 +144,4 @@ class JobRun:
                                            cwd=self.cwd, grace=options.grace, cancelled=self._cancel_requested,
                                            track=self._track, environment=self.environment))
         return judge(outcome, self.output_dir, mark, ignore_return_value=options.ignore_return_value,
-                     timeout=options.timeout)
+                     timeout=options.timeout, coverage_mark=coverage_mark)

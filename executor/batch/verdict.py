@@ -21,6 +21,10 @@ from store.states import JobState
 
 RESULT_FILE = "test.xml"
 LOG_FILE = "log.txt"
+COVERAGE_FILE = "coverage.json"
+
+#: Largest coverage.json read with a job's result.
+COVERAGE_MAX_BYTES = 16 * 1024 * 1024
 
 
 @dataclass(frozen=True)
@@ -77,9 +81,25 @@ def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[Case], str
     return clean_text(text), cases, None
 
 
+def read_coverage(path: Path, mark: FileMark) -> str | None:
+    """COVERAGE HOOK — the one place a job's ``coverage.json`` is read, beside its ``test.xml``.
+
+    The text the attempt wrote (None when it wrote none, or more than :data:`COVERAGE_MAX_BYTES`), handed
+    on with the result (:attr:`JobResult.coverage_json`); the coverage model records it with the job.
+    """
+    if not mark.changed(path):
+        return None
+    try:
+        if path.stat().st_size > COVERAGE_MAX_BYTES:
+            return None
+        return path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None
+
+
 def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_return_value: bool = False,
-          timeout: float | None = None) -> JobResult:
-    """The result of one attempt, ready to be written to the store."""
+          timeout: float | None = None, coverage_mark: FileMark | None = None) -> JobResult:
+    """The result of one attempt, ready to be written to the store (with its coverage.json, if any)."""
     xml_text, cases, unreadable = read_result(output_dir / RESULT_FILE, mark)
     rc = outcome.returncode
     if outcome.cancelled:
@@ -101,7 +121,9 @@ def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_r
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,
                      finished_at=outcome.finished_at, reason=reason, junit_xml=xml_text,
                      log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
-                     log_path=str(output_dir / LOG_FILE))
+                     log_path=str(output_dir / LOG_FILE),
+                     coverage_json=None if coverage_mark is None else read_coverage(output_dir / COVERAGE_FILE,
+                                                                                    coverage_mark))
 
 
 def launch_failure(output_dir: Path, started_at: float, finished_at: float, message: str) -> JobResult:

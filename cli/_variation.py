@@ -54,7 +54,7 @@ def _echo(message: str = "", err: bool = False) -> None:
 def _read_documents(path: str | None) -> list[dict] | None:
     if path is None:
         return None
-    from coverage_engine.parameters import read_parameter_documents
+    from coverage_engine.files.parameters import read_parameter_documents
 
     return read_parameter_documents(path)
 
@@ -310,7 +310,7 @@ _resolvers: dict = {}
 def _log_model(plan, item) -> None:
     """``-l``: resolve this variant on its own and print its model (slow path, one resolution each)."""
     from coverage_engine.errors import OscError
-    from coverage_engine.printer import format_model
+    from coverage_engine.resolve.printer import format_model
     from coverage_engine.variation.plan import default_resolver
 
     resolver = _resolvers.get(plan.path)

@@ -169,7 +169,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
 
     Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
     """
-    from executor.batch import runner
+    from executor.batch import orchestration
     from executor.batch.progress import make_reporter
     from store.jobs import BatchOptions
 
@@ -178,29 +178,29 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     if not resume or command:
         _check_command(command)
     _check_post_run(post_run)
-    request = runner.BatchRequest(
-        input_dir=input_dir, output_dir=runner.output_folder(output_dir), command=tuple(command),
+    request = orchestration.BatchRequest(
+        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_rc, halt_on_failure=halt_on_failure, grace=grace),
         shard=shard)
     store = _open_store(store_url)
     try:
         if resume:
-            batch = runner.resume_batch(store, request.output_dir, request.command, request, _typed_options())
+            batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
-            batch = runner.create_batch(store, request, mode="shared" if enqueue_only else "local")
+            batch = orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
         if enqueue_only:
             count = sum(store.counts(batch.id).values())
             click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
                        f"'{PROG} worker --store URL' on each host")
             return 0
-        counts, signum = runner.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        report = os.path.join(batch.output_dir, runner.REPORT_FILE)
-        line = runner.summary_line(batch, counts, report)
+        counts, signum = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        report = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        line = orchestration.summary_line(batch, counts, report)
         if signum is not None:
             line += "; interrupted, finish with --resume"
         click.echo(line)
-        return runner.exit_code(counts, signum)
+        return orchestration.exit_code(counts, signum)
     finally:
         store.close()
 
@@ -220,8 +220,8 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
 @_debug_option
 def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_for_work, debug):
     """Run queued jobs of the shared store until none is left."""
+    from executor.batch.orchestration import EXIT_INTERRUPTED, run_worker
     from executor.batch.progress import PlainReporter
-    from executor.batch.runner import EXIT_INTERRUPTED, run_worker
     from executor.batch.worker import WorkerSettings
 
     store = _open_store(store_url)
@@ -275,16 +275,16 @@ def status_command(store_url, batch_id, debug):
 @_debug_option
 def report_command(store_url, batch_id, output, debug):
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
-    from executor.batch import runner
+    from executor.batch import orchestration
 
     store = _open_store(store_url)
     try:
         batch = _pick_batch(store, batch_id)
-        counts = runner.write_batch_report(store, batch, output)
+        counts = orchestration.write_batch_report(store, batch, output)
     finally:
         store.close()
-    click.echo(runner.summary_line(batch, counts, output))
-    return runner.exit_code(counts)
+    click.echo(orchestration.summary_line(batch, counts, output))
+    return orchestration.exit_code(counts)
 
 
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}

@@ -17,7 +17,7 @@ EXE = str(Path(sys.executable).parent / "scenario_execution")
 @functools.lru_cache(maxsize=1)
 def frontend_problem() -> str | None:
     """None when the parser and resolver can load a file importing osc.helpers, else the reason."""
-    from coverage_engine.loader import load_scenario_file
+    from coverage_engine.files.loader import load_scenario_file
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "probe.osc"

@@ -7,7 +7,6 @@ from pathlib import Path
 
 import pytest
 
-from coverage_engine import model
 from coverage_engine.errors import (
     ArgumentError,
     NameLookupError,
@@ -16,8 +15,9 @@ from coverage_engine.errors import (
     ParameterFileError,
     UnsupportedFeatureError,
 )
-from coverage_engine.loader import load_scenario_file
-from coverage_engine.model import Const, EnumValue
+from coverage_engine.files.loader import load_scenario_file
+from coverage_engine.resolve import model
+from coverage_engine.resolve.model import Const, EnumValue
 
 
 def load(tmp_path: Path, text: str, overrides=None, name: str = "s.osc") -> model.ScenarioFile:
@@ -248,7 +248,7 @@ def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
     import subprocess
 
-    from coverage_engine.parser import parse_file
+    from coverage_engine.parse.parser import parse_file
 
     unit = parse_file(path)
     if "in [" in unit.text and "keep(" in unit.text:
@@ -280,7 +280,7 @@ def test_keep_it_equals_sets_a_scenario_parameter(tmp_path):
 
 
 def test_sce_parameters_apply_under_command_line_overrides():
-    from coverage_engine.loader import merge_overrides
+    from coverage_engine.files.loader import merge_overrides
 
     recorded = {"test": {"speed": 3.5, "name": "a"}, "other": {"x": 1}}
     assert merge_overrides(recorded, {"test": {"name": "b"}}) == {
@@ -293,7 +293,7 @@ def test_parsing_and_resolving_never_import_the_runtime(project_root):
     import sys
 
     code = ("import sys\n"
-            "from coverage_engine.loader import load_scenario_file\n"
+            "from coverage_engine.files.loader import load_scenario_file\n"
             "load_scenario_file(sys.argv[1])\n"
             "heavy = [m for m in ('py_trees', 'rich', 'sqlalchemy', 'junit_xml') if m in sys.modules]\n"
             "assert not heavy, heavy\n")

@@ -23,10 +23,10 @@ from runtime_models import (
     wait_until,
 )
 
-from coverage_engine import model as m
+from coverage_engine.resolve import model as m
 from executor.runtime.context import ScenarioContext
 from executor.runtime.logger import Logger
-from executor.runtime.runner import ScenarioRunner
+from executor.runtime.tick_loop import ScenarioRunner
 from executor.simulation import SimulationClock
 
 

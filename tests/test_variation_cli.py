@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from coverage_engine.sce import read_sce
+from coverage_engine.files.sce import read_sce
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,8 +26,8 @@ scenario test:
 
 def _front_end_works() -> bool:
     try:
-        from coverage_engine.parser import parse_text
-        from coverage_engine.resolver import resolve
+        from coverage_engine.parse.parser import parse_text
+        from coverage_engine.resolve.resolver import resolve
 
         resolve(parse_text("import osc.helpers\nscenario s:\n    do log('x')\n", "probe.osc"))
     except Exception:  # noqa: BLE001 - any failure means the front end is not ready yet

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("coverage_engine.parser")
+pytest.importorskip("coverage_engine.parse.parser")
 
 from coverage_engine.errors import OscError  # noqa: E402
-from coverage_engine.syntax import Location  # noqa: E402
+from coverage_engine.parse.syntax import Location  # noqa: E402
 from coverage_engine.variation.plan import plan_variation  # noqa: E402
 
 TWO_KEEPS = """import osc.helpers

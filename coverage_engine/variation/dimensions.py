@@ -9,7 +9,7 @@ A dimension is one such constraint in a scenario:
 
 Only a literal list (``ListExpr``) of at least one value makes a dimension; any other ``in`` there
 (a range ``[1..5]``, an empty list, a string or a name on the right) is an error at its position. The finder reads the syntax tree and never resolves;
-each value keeps its exact source text (cut by :class:`~coverage_engine.syntax.Location` offsets), so
+each value keeps its exact source text (cut by :class:`~coverage_engine.parse.syntax.Location` offsets), so
 a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
 
 Dimensions are returned in source order: the first keep in the file is the first dimension, and in
@@ -22,7 +22,7 @@ from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from coverage_engine import syntax as s
+from coverage_engine.parse import syntax as s
 
 
 @dataclass(frozen=True, slots=True)

@@ -29,8 +29,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from coverage_engine import syntax
 from coverage_engine.errors import OscError
+from coverage_engine.parse import syntax
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.template import TextTemplate
 
@@ -187,8 +187,8 @@ def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
 
 def default_resolver(path: Path) -> Resolve:
     """Parse and resolve concrete texts of ``path`` (imports relative to its folder)."""
-    from coverage_engine.parser import parse_text
-    from coverage_engine.resolver import resolve
+    from coverage_engine.parse.parser import parse_text
+    from coverage_engine.resolve.resolver import resolve
 
     file, base = str(path), path.parent
 
@@ -215,7 +215,7 @@ def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: s
 
     :func:`check_plan` must be called before the plan's combinations are used.
     """
-    from coverage_engine.parser import parse_text
+    from coverage_engine.parse.parser import parse_text
 
     path = Path(path)
     if text is None:

@@ -1,15 +1,15 @@
 """Run-time state of one scenario: variables, events, clock, directories, and how it ends.
 
 Behaviours and actions share one :class:`ScenarioContext` per scenario run. Variables are kept by
-:attr:`coverage_engine.model.Variable.key`, so nested ``var`` members (``actor.struct.count``) are
+:attr:`coverage_engine.resolve.model.Variable.key`, so nested ``var`` members (``actor.struct.count``) are
 as easy to reach as scenario-level ones. ``emit end``/``emit fail`` raise :class:`ScenarioEnd`, which
 unwinds the tick at once: nothing after them runs, in the same serial or anywhere else.
 """
 
 from __future__ import annotations
 
-from coverage_engine.evaluate import evaluate
-from coverage_engine.model import Expr, Scenario
+from coverage_engine.resolve.evaluate import evaluate
+from coverage_engine.resolve.model import Expr, Scenario
 from executor.runtime.logger import Logger
 
 

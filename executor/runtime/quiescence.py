@@ -18,7 +18,7 @@ import math
 import py_trees
 from py_trees.common import ParallelPolicy, Status
 
-from coverage_engine.model import (
+from coverage_engine.resolve.model import (
     Const,
     FieldOf,
     MakeList,
@@ -26,7 +26,7 @@ from coverage_engine.model import (
     Operation,
     VariableRef,
 )
-from executor.runtime import behaviours
+from executor.runtime import directives
 from executor.runtime.modifiers import ClockTimeout
 
 NOW = -math.inf
@@ -59,12 +59,12 @@ def next_wake(node: py_trees.behaviour.Behaviour) -> float:
     The contract: for every clock time ``t < next_wake(root)`` a tick is a no-op.
     """
     kind = type(node)
-    if kind is behaviours.WaitElapsed:
+    if kind is directives.WaitElapsed:
         return node.finish
-    if kind is behaviours.WaitEvent:
+    if kind is directives.WaitEvent:
         # emitted later in the same tick (by a branch ticked after this one): seen next tick
         return NOW if node.event in node.context.events else NEVER
-    if kind is behaviours.WaitCondition:
+    if kind is directives.WaitCondition:
         if not node.pure:
             return NOW
         try:

@@ -18,7 +18,7 @@ from contextlib import contextmanager
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.external_methods import set_directories
 from executor.runtime.logger import Logger
-from executor.runtime.plan import PlannedRun
+from executor.runtime.planned_runs import PlannedRun
 from executor.runtime.results import ScenarioResult
 from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments, simulation_dt
 
@@ -76,7 +76,7 @@ def abort_on_signals():
 
 def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger) -> SessionOutcome:
     """Run every planned scenario and return the results (never raises for a scenario's failure)."""
-    from executor.runtime.runner import RunAborted, ScenarioRunner
+    from executor.runtime.tick_loop import RunAborted, ScenarioRunner
 
     outcome = SessionOutcome()
     results = outcome.results

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from coverage_engine.parse.syntax import Location
+from coverage_engine.location import Location
 from coverage_engine.resolve import model as m
 
 LOC = Location("test.osc", 1, 1)

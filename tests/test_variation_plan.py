@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("coverage_engine.parse.parser")
 
 from coverage_engine.errors import OscError  # noqa: E402
-from coverage_engine.parse.syntax import Location  # noqa: E402
+from coverage_engine.location import Location  # noqa: E402
 from coverage_engine.variation.plan import plan_variation  # noqa: E402
 
 TWO_KEEPS = """import osc.helpers

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from coverage_engine.errors import ParameterFileError
-from coverage_engine.parse.syntax import Location
+from coverage_engine.location import Location
 from coverage_engine.resolve.model import EnumValue, ScenarioFile
 
 

@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
-from coverage_engine.parse.syntax import Location
+from coverage_engine.location import Location
 
 #: The format version this release writes.
 SCE_FORMAT_VERSION = 2

@@ -14,8 +14,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from coverage_engine.errors import OscSyntaxError
+from coverage_engine.location import Location
 from coverage_engine.parse.lexer import Token
-from coverage_engine.parse.syntax import Location
 
 TAB_WIDTH = 8
 

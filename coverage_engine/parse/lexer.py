@@ -13,9 +13,9 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 
-from coverage_engine.parse.lalr import ParseFailure, Tables
+from coverage_engine.parse.lalr import ParseFailure
+from coverage_engine.parse.tables import NAME_RE, Tables
 
-NAME_RE = re.compile(r"[^\W\d]\w*")
 QUOTED_NAME_RE = re.compile(r"\|[^|\r\n]+\|")
 NUMBER_RE = re.compile(r"0[xX][0-9a-fA-F]+|\d*\.\d+(?:[eE][+-]?\d+)?|\d+")
 STRING_RE = re.compile(

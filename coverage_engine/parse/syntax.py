@@ -3,33 +3,13 @@
 The parser (``coverage_engine.parse.parser``) builds these in one lark Transformer and puts no meaning
 into them: names are not looked up, units are not converted, nothing is evaluated. The resolver
 (``coverage_engine.resolve.resolver``) reads them and builds the model. Every node carries a
-:class:`Location`, so every later error can point at the source.
+:class:`~coverage_engine.location.Location`, so every later error can point at the source.
 """
 
 from __future__ import annotations
 
+from coverage_engine.location import Location
 from coverage_engine.records import Record, record
-
-
-@record
-class Location(Record):
-    """Where a node stands in its file: 1-based line/column of its start and end, and 0-based offsets.
-
-    ``start_pos``/``end_pos`` index the file's text (as read, after CRLF was kept) so tools such as the
-    variation generator can cut and replace the exact source of a node.
-    """
-
-    file: str
-    line: int
-    column: int
-    end_line: int = 0
-    end_column: int = 0
-    start_pos: int = 0
-    end_pos: int = 0
-
-    def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.column}"
-
 
 # --------------------------------------------------------------------------------------------------
 # Names and types

@@ -1,8 +1,9 @@
-"""The one place where lark's parse failures become our :class:`OscSyntaxError`.
+"""The one place where parse failures become our :class:`~coverage_engine.errors.OscSyntaxError`.
 
 The message names the offending token and what could have come instead in user words (``end of
-line``, ``')'`` -- not ``_NL``/``RPAR``); the hint comes from lark's ``match_examples`` over
-:data:`HINTS`, a table of labelled bad snippets (tested in ``tests/test_parser_errors.py``).
+line``, ``')'`` -- not ``_NL``/``RPAR``); the hint is the label of the snippet of :data:`HINTS`, a
+table of labelled bad snippets, that fails in the same parser state (lark's ``match_examples`` idea;
+tested in ``tests/test_parser_errors.py``).
 """
 
 from __future__ import annotations
@@ -10,8 +11,10 @@ from __future__ import annotations
 import re
 
 from coverage_engine.errors import OscError, OscSyntaxError
+from coverage_engine.location import Location
 from coverage_engine.parse.lalr import ParseFailure
-from coverage_engine.parse.syntax import Location
+from coverage_engine.parse.raw import raw_parse
+from coverage_engine.parse.tables import tables
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
@@ -89,8 +92,6 @@ def describe_terminal(name: str) -> str:
     """A terminal of the grammar in user words: ``'('`` for LPAR, ``end of line`` for _NL."""
     if name in _WORDS:
         return _WORDS[name]
-    from coverage_engine.parse.lalr import tables
-
     word = tables().terminal_words.get(name)
     return f"'{word}'" if word is not None else name.lower()
 
@@ -128,8 +129,6 @@ def _signature(failure: ParseFailure) -> tuple[int, str | None]:
 
 def hint_for(failure: ParseFailure) -> str | None:
     """The label of :data:`HINTS` whose snippet fails like ``failure`` (same state; same token first)."""
-    from coverage_engine.parse.parser import raw_parse
-
     state_only = None
     for label, snippets in HINTS.items():
         for snippet in snippets:

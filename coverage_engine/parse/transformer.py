@@ -1,7 +1,7 @@
 """The one lark Transformer that turns ``grammar.lark`` matches into :mod:`coverage_engine.parse.syntax` nodes.
 
 It runs inside the LALR parser (no intermediate parse tree) with every token kept, so each rule
-sees its first and last token and computes its own :class:`~coverage_engine.parse.syntax.Location` --
+sees its first and last token and computes its own :class:`~coverage_engine.parse.Location` --
 exact to the character, which the variation generator needs to cut and replace source. No
 semantics here: nothing is looked up, converted or evaluated. Constructs the grammar accepts only
 so they can be refused by name (``cover``, ``on @event``, ``sample`` …) raise
@@ -11,6 +11,7 @@ so they can be refused by name (``cover``, ``on @event``, ``sample`` …) raise
 from __future__ import annotations
 
 from coverage_engine.errors import OscSyntaxError
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
 from coverage_engine.parse.transformer_expr import BehaviorExpressionRules
@@ -65,7 +66,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         return s.UnitDecl(self.name(name), self.name(type_name), tuple(exps), factor, offset,
                           self.loc(children))
 
-    def exponent(self, value: int | float, loc: s.Location) -> int:
+    def exponent(self, value: int | float, loc: Location) -> int:
         if not isinstance(value, int):
             raise OscSyntaxError("an SI exponent must be an integer", loc, self.source_line(loc.line))
         return value
@@ -121,7 +122,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         name = children[1]
         if len(name.parts) > 1:
             raise self.unsupported("actor modifiers (modifier actor.name)", name.location)
-        if isinstance(children[2], s.Location):
+        if isinstance(children[2], Location):
             raise self.unsupported("modifier ... of ...", children[2])
         members = tuple(c for c in children[2:] if not isinstance(c, Token))
         return s.TypeDecl("modifier", name, None, members, self.loc(children))
@@ -172,7 +173,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         for c in children[2:]:
             if isinstance(c, tuple):
                 params = c
-            elif isinstance(c, s.Location):
+            elif isinstance(c, Location):
                 raise self.unsupported("event ... is <condition>", c)
         return s.EventDecl(self.name(children[1]), params, self.loc(children))
 

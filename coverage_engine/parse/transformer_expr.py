@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
 from coverage_engine.parse.strings import unescape_string
@@ -38,7 +39,7 @@ def _start(x):
         return x.line, x.column, x.start_pos
     if isinstance(x, (tuple, list)):
         return _start(x[0])
-    loc = x.location if not isinstance(x, s.Location) else x
+    loc = x.location if not isinstance(x, Location) else x
     return loc.line, loc.column, loc.start_pos
 
 
@@ -48,7 +49,7 @@ def _end(x):
         return x.end_line, x.end_column, x.end_pos
     if isinstance(x, (tuple, list)):
         return _end(x[-1])
-    loc = x.location if not isinstance(x, s.Location) else x
+    loc = x.location if not isinstance(x, Location) else x
     return loc.end_line, loc.end_column, loc.end_pos
 
 
@@ -66,22 +67,22 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ helpers
 
-    def loc(self, children) -> s.Location:
+    def loc(self, children) -> Location:
         items = [c for c in children if c is not None and not (isinstance(c, tuple) and not c)]
         if not items:
-            return s.Location(self.file, 1, 1, 1, 1, 0, 0)
+            return Location(self.file, 1, 1, 1, 1, 0, 0)
         line, column, start = _start(items[0])
         end_line, end_column, end = _end(items[-1])
-        return s.Location(self.file, line, column, end_line, end_column, start, end)
+        return Location(self.file, line, column, end_line, end_column, start, end)
 
-    def tloc(self, tok: Token) -> s.Location:
-        return s.Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
+    def tloc(self, tok: Token) -> Location:
+        return Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
                           tok.start_pos, tok.end_pos)
 
-    def span(self, first, last) -> s.Location:
+    def span(self, first, last) -> Location:
         line, column, start = _start(first)
         end_line, end_column, end = _end(last)
-        return s.Location(self.file, line, column, end_line, end_column, start, end)
+        return Location(self.file, line, column, end_line, end_column, start, end)
 
     def source_line(self, line: int) -> str | None:
         if self._lines is None:

@@ -18,10 +18,11 @@ from coverage_engine.errors import (
 )
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
-from coverage_engine.resolve.expressions import bind_arguments, coerce, resolve_expression
-from coverage_engine.resolve.instances import extract_keep
+from coverage_engine.resolve.keeps import extract_keep
+from coverage_engine.resolve.operations import bind_arguments, coerce
 from coverage_engine.resolve.scope import Scope
 from coverage_engine.resolve.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
+from coverage_engine.resolve.values import resolve_expression
 
 
 def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:

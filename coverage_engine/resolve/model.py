@@ -13,7 +13,7 @@ Value representation (also what ``log`` prints, as Python ``repr``/``str``):
 
 from __future__ import annotations
 
-from coverage_engine.parse.syntax import Location
+from coverage_engine.location import Location
 from coverage_engine.records import Record, record
 
 

@@ -7,6 +7,7 @@ types get their members, parents first. Redeclaring a name is an error at the se
 from __future__ import annotations
 
 from coverage_engine.errors import NameLookupError, ResolveError, UnsupportedFeatureError
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve.types import (
     PRIMITIVES,
@@ -79,7 +80,7 @@ def build_namespace(units: list[syntax.CompilationUnit], main: syntax.Compilatio
     return ns
 
 
-def _register(ns: Namespace, name: str, value: OscType, location: syntax.Location) -> None:
+def _register(ns: Namespace, name: str, value: OscType, location: Location) -> None:
     if name.startswith("listof"):
         # The reference implementation rejects such names; refusing them too keeps files portable.
         raise ResolveError(f"type name '{name}': names starting with 'listof' are reserved", location)

@@ -12,16 +12,17 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from coverage_engine.errors import OscError, ParameterFileError, ResolveError
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
 from coverage_engine.resolve.checks import check_declarations
 from coverage_engine.resolve.do_body import apply_modifiers, resolve_behavior
 from coverage_engine.resolve.imports import collect_units
-from coverage_engine.resolve.instances import FieldInfo, global_value, instantiate
 from coverage_engine.resolve.namespace import build_namespace
 from coverage_engine.resolve.overrides import check_document, not_overridable_reason, override_hook
 from coverage_engine.resolve.scope import ResolveContext, Scope, TypedExpr
 from coverage_engine.resolve.types import CompoundType
+from coverage_engine.resolve.values import FieldInfo, global_value, instantiate
 
 
 def resolve(unit: syntax.CompilationUnit, base_dir: Path | str | None = None,
@@ -38,7 +39,7 @@ def resolve(unit: syntax.CompilationUnit, base_dir: Path | str | None = None,
         raise
     except RecursionError:
         raise ResolveError("the file is nested too deeply to resolve (an expression or structure of "
-                           "thousands of levels)", syntax.Location(unit.file, 1, 1)) from None
+                           "thousands of levels)", Location(unit.file, 1, 1)) from None
 
 
 def _attach_source_line(exc: OscError, texts: dict[str, str]) -> None:
@@ -57,7 +58,7 @@ def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], 
         global_value(ctx, name, namespace.globals[name].location)
     check_declarations(ctx, unit)
     if not namespace.scenarios:
-        raise ResolveError("the file declares no scenario", syntax.Location(unit.file, 1, 1))
+        raise ResolveError("the file declares no scenario", Location(unit.file, 1, 1))
     _check_unique_scenarios(namespace.scenarios)
     per_scenario = check_document(overrides, [s.name for s in namespace.scenarios])
     scenarios = tuple(_scenario(ctx, s, per_scenario.get(s.name)) for s in namespace.scenarios)

@@ -7,6 +7,7 @@ parent and finally to the globals of the :class:`ResolveContext`.
 
 from __future__ import annotations
 
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.records import Record, record
 from coverage_engine.resolve import model
@@ -86,5 +87,5 @@ class KeepValue(Record):
     path: tuple[str, ...]
     value: syntax.Expression
     scope: Scope
-    location: syntax.Location
+    location: Location
     is_default: bool = False

@@ -6,6 +6,7 @@ expression or a YAML override). They carry no syntax nodes except the declaratio
 
 from __future__ import annotations
 
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve.model import EnumValue
 
@@ -39,7 +40,7 @@ class PhysicalType(OscType):
     __slots__ = ("name", "kind", "exponents", "location")
 
     def __init__(self, name: str, exponents: tuple[tuple[str, int], ...],
-                 location: syntax.Location | None = None) -> None:
+                 location: Location | None = None) -> None:
         self.name, self.kind, self.exponents, self.location = name, "physical", exponents, location
 
     def __repr__(self) -> str:
@@ -52,7 +53,7 @@ class Unit:
     __slots__ = ("name", "physical", "factor", "offset", "location")
 
     def __init__(self, name: str, physical: PhysicalType, factor: float, offset: float,
-                 location: syntax.Location | None = None) -> None:
+                 location: Location | None = None) -> None:
         self.name, self.physical, self.factor, self.offset, self.location = name, physical, factor, offset, location
 
 
@@ -61,7 +62,7 @@ class EnumType(OscType):
 
     __slots__ = ("name", "kind", "members", "location")
 
-    def __init__(self, name: str, members: dict[str, int], location: syntax.Location | None = None) -> None:
+    def __init__(self, name: str, members: dict[str, int], location: Location | None = None) -> None:
         self.name, self.kind, self.members, self.location = name, "enum", members, location
 
     def value(self, member: str) -> EnumValue:
@@ -87,7 +88,7 @@ class FieldDecl:
     __slots__ = ("name", "type", "default", "with_members", "owner", "location")
 
     def __init__(self, name: str, type_: OscType, default: syntax.Expression | None, with_members: tuple,
-                 owner: CompoundType, location: syntax.Location) -> None:
+                 owner: CompoundType, location: Location) -> None:
         self.name, self.type, self.default, self.with_members = name, type_, default, with_members
         self.owner, self.location = owner, location
 
@@ -98,7 +99,7 @@ class VarDecl:
     __slots__ = ("name", "type", "initial", "owner", "location")
 
     def __init__(self, name: str, type_: OscType, initial: syntax.Expression | None, owner: CompoundType,
-                 location: syntax.Location) -> None:
+                 location: Location) -> None:
         self.name, self.type, self.initial, self.owner, self.location = name, type_, initial, owner, location
 
 

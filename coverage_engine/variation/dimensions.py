@@ -9,7 +9,7 @@ A dimension is one such constraint in a scenario:
 
 Only a literal list (``ListExpr``) of at least one value makes a dimension; any other ``in`` there
 (a range ``[1..5]``, an empty list, a string or a name on the right) is an error at its position. The finder reads the syntax tree and never resolves;
-each value keeps its exact source text (cut by :class:`~coverage_engine.parse.syntax.Location` offsets), so
+each value keeps its exact source text (cut by :class:`~coverage_engine.parse.Location` offsets), so
 a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
 
 Dimensions are returned in source order: the first keep in the file is the first dimension, and in
@@ -22,6 +22,7 @@ from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 
 
@@ -35,7 +36,7 @@ class Choice:
 
     text: str
     stored: object
-    location: s.Location
+    location: Location
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +56,7 @@ class Dimension:
     choices: tuple[Choice, ...]
     start: int
     end: int
-    location: s.Location
+    location: Location
 
     def replacement(self, choice: int) -> str:
         """The source text replacing the ``in`` expression for ``choices[choice]``."""
@@ -100,7 +101,7 @@ def one_line(text: str) -> str:
     return "".join(out).strip()
 
 
-def _cut(text: str, location: s.Location) -> str:
+def _cut(text: str, location: Location) -> str:
     return text[location.start_pos:location.end_pos]
 
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import OscError
+from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.template import TextTemplate
@@ -75,7 +76,7 @@ class Rejection:
     option: int
     error: OscError
     shown: dict[str, str]
-    location: syntax.Location | None
+    location: Location | None
     skipped: int = 0
 
 

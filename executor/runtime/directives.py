@@ -3,7 +3,8 @@
 Each follows the py_trees life cycle: configuration in ``__init__``, per-activation state in
 ``initialise``, one non-blocking step in ``update``. They read time from the scenario's clock (wall
 or simulation) and values from the scenario's variables through the shared
-:class:`~executor.runtime.context.ScenarioContext`.
+:class:`~executor.runtime.context.ScenarioContext`. :func:`is_pure` marks the conditions that cannot
+change while no action runs, which :mod:`~executor.runtime.quiescence` relies on to skip idle ticks.
 """
 
 from __future__ import annotations
@@ -11,8 +12,23 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from coverage_engine.resolve.model import Expr
+from coverage_engine.resolve.model import Const, Expr, FieldOf, MakeList, MakeStruct, Operation, VariableRef
 from executor.runtime.context import ScenarioContext, ScenarioEnd
+
+
+def is_pure(expr: Expr) -> bool:
+    """True when computing ``expr`` depends on variables only (no external method)."""
+    if isinstance(expr, (Const, VariableRef)):
+        return True
+    if isinstance(expr, Operation):
+        return all(is_pure(o) for o in expr.operands)
+    if isinstance(expr, FieldOf):
+        return is_pure(expr.target)
+    if isinstance(expr, MakeList):
+        return all(is_pure(i) for i in expr.items)
+    if isinstance(expr, MakeStruct):
+        return all(is_pure(v) for _, v in expr.members)
+    return False
 
 
 class WaitElapsed(py_trees.behaviour.Behaviour):
@@ -47,8 +63,6 @@ class WaitCondition(py_trees.behaviour.Behaviour):
         super().__init__(name)
         self.condition = condition
         self.context = context
-        from executor.runtime.quiescence import is_pure
-
         #: depends on variables only, so it cannot change while no action runs
         self.pure = is_pure(condition)
 

@@ -18,14 +18,6 @@ import math
 import py_trees
 from py_trees.common import ParallelPolicy, Status
 
-from coverage_engine.resolve.model import (
-    Const,
-    FieldOf,
-    MakeList,
-    MakeStruct,
-    Operation,
-    VariableRef,
-)
 from executor.runtime import directives
 from executor.runtime.modifiers import ClockTimeout
 
@@ -36,21 +28,6 @@ _PURE_DECORATORS = (py_trees.decorators.Inverter, py_trees.decorators.Repeat, py
                     py_trees.decorators.FailureIsRunning, py_trees.decorators.FailureIsSuccess,
                     py_trees.decorators.RunningIsFailure, py_trees.decorators.RunningIsSuccess,
                     py_trees.decorators.SuccessIsFailure, py_trees.decorators.SuccessIsRunning)
-
-
-def is_pure(expr) -> bool:
-    """True when computing ``expr`` depends on variables only (no external method)."""
-    if isinstance(expr, (Const, VariableRef)):
-        return True
-    if isinstance(expr, Operation):
-        return all(is_pure(o) for o in expr.operands)
-    if isinstance(expr, FieldOf):
-        return is_pure(expr.target)
-    if isinstance(expr, MakeList):
-        return all(is_pure(i) for i in expr.items)
-    if isinstance(expr, MakeStruct):
-        return all(is_pure(v) for _, v in expr.members)
-    return False
 
 
 def next_wake(node: py_trees.behaviour.Behaviour) -> float:

@@ -77,7 +77,8 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
                               command=request.command, options=options, specs=specs)
 
 
-#: The options stored with a batch, as they are spelled on the command line.
+#: The options stored with a batch (the fields of :class:`store.jobs.BatchOptions`) and their command-line
+#: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
 OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
                 "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
                 "grace": "--grace", "shard": "--shard"}

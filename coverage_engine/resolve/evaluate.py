@@ -2,7 +2,8 @@
 
 The resolver folds everything it can into :class:`~coverage_engine.resolve.model.Const`; what remains
 (variables, external methods) is computed here while a scenario runs. External methods are imported
-on first use, so a scenario parses and resolves without importing user code.
+on first use, so a scenario parses and resolves without importing user code; those of the standard
+libraries are provided by the runtime (:func:`provide_module`).
 """
 
 from __future__ import annotations
@@ -72,6 +73,16 @@ def add_import_paths(paths) -> None:
         text = str(Path(path).resolve())
         if text not in sys.path:
             sys.path.insert(0, text)
+
+
+def provide_module(module: str, functions: Mapping[str, Callable]) -> None:
+    """Serve external methods declared as ``module.<name>`` with ``functions`` instead of importing ``module``.
+
+    The runtime provides the functions the standard libraries declare (``osc.helpers``), so the
+    language's own files name no module of the runtime.
+    """
+    for name, func in functions.items():
+        _function_cache[(module, name)] = func
 
 
 def external_function(method: ExternalMethod) -> Callable:

@@ -15,8 +15,8 @@ import signal
 from collections.abc import Callable
 from contextlib import contextmanager
 
+from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
-from executor.runtime.external_methods import set_directories
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun
 from executor.runtime.results import ScenarioResult
@@ -83,6 +83,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
     simulation = options.simulation
     sim_clock = None
     on_result = options.on_result
+    external_methods.provide()
     with abort_on_signals():
         try:
             if simulation is not None:
@@ -101,7 +102,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
             for run in runs:
                 if run.output_dir:
                     os.makedirs(run.output_dir, exist_ok=True)
-                set_directories(options.input_dir, run.output_dir or options.output_root)
+                external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
                 if simulation is not None:
                     failure = _reset_simulation(simulation, run)
                     if failure is not None:

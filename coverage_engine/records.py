@@ -4,14 +4,21 @@
 (each class takes a fraction of a millisecond to process, and ``scenario_execution -n`` has a budget
 of a few tens of milliseconds). :func:`record` reads the annotated fields in order, gives the class
 ``__slots__`` and one generated ``__init__``, and takes immutability, equality, hashing and ``repr``
-from :class:`Record`, written once.
+from :class:`Record`, written once. To type checkers the decorator says "a frozen dataclass"
+(``typing.dataclass_transform``), so they know each record's constructor and fields.
 """
 
 from __future__ import annotations
 
-from typing import TypeVar
+import sys
+from typing import TYPE_CHECKING, TypeVar
 
-T = TypeVar("T")
+if TYPE_CHECKING or sys.version_info >= (3, 11):
+    from typing import dataclass_transform
+else:  # Python 3.10: the marker only informs type checkers, so nothing is lost without it
+    def dataclass_transform(**_kwargs):
+        return lambda decorator: decorator
+
 _set = object.__setattr__
 
 
@@ -44,7 +51,11 @@ class Record:
         return (type(self), tuple(getattr(self, n) for n in self._fields))
 
 
-def record(cls: type[T]) -> type[T]:
+R = TypeVar("R", bound=Record)
+
+
+@dataclass_transform(eq_default=True, frozen_default=True)
+def record(cls: type[R]) -> type[R]:
     """Turn an annotated class deriving from :class:`Record` into a slotted record with those fields.
 
     Fields are the class's own annotations in order; a class attribute of the same name is the
@@ -66,8 +77,8 @@ def record(cls: type[T]) -> type[T]:
     return new
 
 
-def replace(record: T, **changes: object) -> T:
+def replace(record: R, **changes: object) -> R:
     """A copy of ``record`` with some fields changed."""
-    values = {n: getattr(record, n) for n in record._fields}  # type: ignore[attr-defined]
+    values = {n: getattr(record, n) for n in record._fields}
     values.update(changes)
     return type(record)(**values)

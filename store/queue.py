@@ -15,6 +15,7 @@ import json
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import Any
 
 from sqlalchemy import Connection, Engine, func, insert, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
@@ -89,7 +90,7 @@ class QueueStore(QueueReads):
     # ----------------------------------------------------------------- transitions
     @staticmethod
     def _move(conn: Connection, transition: Transition, target: JobState, where: Sequence,
-              values: dict, returning: Sequence = ()) -> list:
+              values: dict, returning: Sequence = ()) -> Sequence[Any]:
         """Run the one guarded UPDATE of ``transition``; return the rows it changed (ids or ``returning``)."""
         stmt = sql.guarded_update(transition, target, *where).values(**values)
         return conn.execute(stmt.returning(*(returning or [jobs.c.id]))).all()

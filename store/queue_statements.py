@@ -8,6 +8,7 @@ same few statements thousands of times, so the hot ones are built here once with
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 from sqlalchemy import ColumnElement, Update, and_, bindparam, insert, select, update
 
@@ -79,7 +80,7 @@ def end_statement(transition: Transition) -> Update:
     """Record the end of an attempt (finish, retry or cancel) from its holder; target state in ``b_status``."""
     src = sorted(s.value for s in states.sources(transition))
     assert src == [JobState.RUNNING.value], transition
-    values = dict(status=bindparam("b_status"), exit_code=bindparam("b_exit"), finished_at=bindparam("b_end"),
+    values: dict[str, Any] = dict(status=bindparam("b_status"), exit_code=bindparam("b_exit"), finished_at=bindparam("b_end"),
                   duration=bindparam("b_duration"), reason=bindparam("b_reason"), junit_xml=bindparam("b_xml"),
                   log_tail=bindparam("b_log"), output_dir=bindparam("b_out"), lease_expires_at=None)
     if transition is Transition.RETRY:

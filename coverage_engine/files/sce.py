@@ -44,7 +44,7 @@ from __future__ import annotations
 import json
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -135,7 +135,7 @@ class SceTemplate:
     def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
                  chunks: list[str], replacements: list[list[str]], keys: list[str],
                  shown: list[list[str]], stored: list[list[object]],
-                 documents: list[Mapping[str, object]] | None = None) -> None:
+                 documents: Sequence[Mapping[str, object]] | None = None) -> None:
         model = "".join(chunks)
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
             _BLOCK_UNSAFE.search(r) is None and "\n" not in r for slot in replacements for r in slot)

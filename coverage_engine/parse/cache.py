@@ -11,6 +11,9 @@ import os
 import pickle
 import sys
 from pathlib import Path
+from typing import TypeVar
+
+K = TypeVar("K")
 
 
 def text_digest(text: str) -> str:
@@ -33,7 +36,7 @@ def cache_file(digest: str, suffix: str = ".pickle") -> Path:
     return Path(base) / name
 
 
-def load(path: Path, kind: type) -> object | None:
+def load(path: Path, kind: type[K]) -> K | None:
     """The object pickled at ``path`` if it is a ``kind``, else None (missing, unreadable or stale)."""
     try:
         with open(path, "rb") as handle:

@@ -52,7 +52,7 @@ class OscIndenter:
         return Token(kind, value, after.end_pos, after.end_line, after.end_column,
                      after.end_line, after.end_column, after.end_pos)
 
-    def process(self, stream: Iterator[Token]) -> Iterator[Token]:  # type: ignore[override]
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
         """Yield the tokens of ``stream`` with indentation tokens inserted; newlines in brackets dropped."""
         levels = [0]
         depth = 0

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from typing import NoReturn
 
 from coverage_engine.parse.lalr import ParseFailure
 from coverage_engine.parse.tables import NAME_RE, Tables
@@ -79,7 +80,7 @@ class OscLexer:
         while pos < length:
             char = text[pos]
             if char == " " or char == "\t" or char == "\f":
-                pos = BLANK_RE.match(text, pos).end()
+                pos = BLANK_RE.match(text, pos).end()  # type: ignore[union-attr]  # a blank was just seen
                 continue
             column = pos - line_start + 1
             if char.isalpha() or char == "_":
@@ -97,6 +98,7 @@ class OscLexer:
             if char.isdigit() or (char == "." and text[pos + 1:pos + 2].isdigit()
                                   and text[pos - 1:pos] != "."):
                 match = NUMBER_RE.match(text, pos)
+                assert match is not None  # a digit (or '.' and a digit) was just seen
                 end = match.end()
                 value = match.group()
                 if value[:2] in ("0x", "0X"):
@@ -109,7 +111,7 @@ class OscLexer:
                 pos = end
                 continue
             if char == "\n" or char == "\r" or char == "#":
-                end = NEWLINE_RE.match(text, pos).end()
+                end = NEWLINE_RE.match(text, pos).end()  # type: ignore[union-attr]  # a newline or '#' was just seen
                 value = text[pos:end]
                 count, last = _breaks(value)
                 end_line = line + count
@@ -163,6 +165,6 @@ class OscLexer:
             yield _new_token(kind, char, pos, line, column, line, column + 1, pos + 1)
             pos += 1
 
-    def _fail(self, pos: int, line: int, column: int, state_box: list[int]) -> None:
+    def _fail(self, pos: int, line: int, column: int, state_box: list[int]) -> NoReturn:
         state = state_box[0]
         raise ParseFailure(state, set(self.states[state]), None, pos, line, column)

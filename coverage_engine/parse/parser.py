@@ -87,10 +87,8 @@ def parse_file_cached(path: Path) -> CompilationUnit:
     if unit is not None:
         return unit
     cache_path = _disk_cache_path(resolved, stat)
-    loaded = cache.load(cache_path, CompilationUnit)
-    if isinstance(loaded, CompilationUnit):
-        unit = loaded
-    else:
+    unit = cache.load(cache_path, CompilationUnit)
+    if unit is None:
         unit = parse_file(resolved)
         cache.store(cache_path, unit)
     _parsed_cache[key] = unit

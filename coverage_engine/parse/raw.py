@@ -9,6 +9,7 @@ The parts are shared by the process, so callers hold :data:`LOCK` around a parse
 from __future__ import annotations
 
 import threading
+from typing import cast
 
 from coverage_engine.parse.indenter import OscIndenter
 from coverage_engine.parse.lalr import run
@@ -39,4 +40,4 @@ def raw_parse(text: str, file: str = "<snippet>") -> CompilationUnit:
     indenter.file, indenter.text = file, text
     builder.reset(file, text)
     state_box = [0]
-    return run(indenter.process(lexer.lex(text, state_box)), builder, state_box)
+    return cast(CompilationUnit, run(indenter.process(lexer.lex(text, state_box)), builder, state_box))

@@ -9,6 +9,7 @@ Unary minus written directly before a number literal is folded into it (``-2.0ra
 from __future__ import annotations
 
 import re
+from typing import cast
 
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.location import Location
@@ -224,7 +225,7 @@ class BehaviorExpressionRules:
             return operand
         if op.value == "-" and adjacent:
             if isinstance(operand, s.Literal) and operand.kind in ("int", "float"):
-                return s.Literal(operand.kind, -operand.value, loc)
+                return s.Literal(operand.kind, -cast("int | float", operand.value), loc)
             if isinstance(operand, s.PhysicalLiteral):
                 return s.PhysicalLiteral(-operand.number, operand.unit, loc)
         return s.UnaryOp(str(op), operand, loc)

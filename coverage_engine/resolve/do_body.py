@@ -8,6 +8,7 @@ block apply to that composite or invocation; several nest in the order written, 
 from __future__ import annotations
 
 import math
+from typing import cast
 
 from coverage_engine.errors import (
     ArgumentError,
@@ -65,10 +66,10 @@ def _composite(node: syntax.Composite, scope: Scope) -> model.Behavior:
             modifiers.append(syntax.ModifierInvocation(member.name, member.arguments, member.location))
         else:
             children.append(resolve_behavior(member, scope))
-    for member in node.with_members:
-        if isinstance(member, syntax.KeepConstraint):
-            raise ResolveError(f"'keep' cannot constrain a '{node.kind}'", member.location)
-        modifiers.append(member)
+    for extra in node.with_members:
+        if isinstance(extra, syntax.KeepConstraint):
+            raise ResolveError(f"'keep' cannot constrain a '{node.kind}'", extra.location)
+        modifiers.append(extra)
     composite = model.Composite(node.kind, node.label or node.kind, tuple(children), node.location)
     return apply_modifiers(composite, modifiers, scope)
 
@@ -206,7 +207,7 @@ def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
         if not (is_time or run_time_number or value.type is ANY):
             raise OscTypeError(f"'elapsed(...)' needs a time with its unit (e.g. 3s), got {value.type}",
                                arg.location)
-        if value.is_const and not (0 <= value.value < math.inf):
+        if value.is_const and not (0 <= cast(float, value.value) < math.inf):
             raise ArgumentError(f"'elapsed(...)' needs a finite, non-negative time, got {value.value} s",
                                 arg.location)
         return model.WaitElapsed(node.label or "wait", value.expr, node.location)

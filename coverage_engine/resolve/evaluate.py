@@ -13,6 +13,7 @@ import operator
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any, cast
 
 from coverage_engine.resolve.model import (
     Const,
@@ -51,7 +52,7 @@ _BINARY: dict[str, Callable] = {
 }
 
 
-def apply_operator(op: str, values: list) -> object:
+def apply_operator(op: str, values: list) -> Any:
     """Apply operator ``op`` to already computed operand values (shared by the resolver's folding)."""
     if op == "neg":
         return -values[0]
@@ -118,7 +119,7 @@ def evaluate(expr: Expr, variables: Mapping[str, object]) -> object:
         except Exception as exc:  # noqa: BLE001
             raise EvaluationError(f"cannot compute '{expr.op}' of {values}: {exc}", expr.location) from exc
     if isinstance(expr, FieldOf):
-        return evaluate(expr.target, variables)[expr.name]
+        return cast(dict, evaluate(expr.target, variables))[expr.name]
     if isinstance(expr, MakeList):
         return [evaluate(i, variables) for i in expr.items]
     if isinstance(expr, MakeStruct):

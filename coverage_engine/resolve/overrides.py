@@ -123,7 +123,8 @@ def from_yaml(ctx: ResolveContext, raw: object, target: OscType, base: object, w
 
 def _default_instance(ctx: ResolveContext, ctype: CompoundType) -> dict:
     value = instantiate(ctx, ctype, {}, [], ctx.fresh_path(ctype.name), ctype.declaration.location)
-    return value.value if value.is_const else {}
+    members = value.value if value.is_const else None
+    return members if isinstance(members, dict) else {}
 
 
 def _yaml_kind(raw: object) -> str:

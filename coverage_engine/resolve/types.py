@@ -110,7 +110,7 @@ class CompoundType(OscType):
     :mod:`coverage_engine.resolve.namespace` after every name is registered.
     """
 
-    def __init__(self, kind: str, qualified: str, declaration: syntax.TypeDecl | None,
+    def __init__(self, kind: str, qualified: str, declaration: syntax.TypeDecl,
                  parent: CompoundType | None = None) -> None:
         self.kind, self.qualified, self.declaration, self.parent = kind, qualified, declaration, parent
         self.fields: dict[str, FieldDecl] = {}
@@ -131,7 +131,8 @@ class CompoundType(OscType):
 
     def ancestry(self) -> list[CompoundType]:
         """This type and its parents, nearest first."""
-        chain, node = [], self
+        chain: list[CompoundType] = []
+        node: CompoundType | None = self
         while node is not None:
             chain.append(node)
             node = node.parent

@@ -188,9 +188,10 @@ def _enum_value(expr: syntax.EnumValueRef, scope: Scope, expected: OscType | Non
             raise ResolveError(f"'!{expr.member}': the enum type cannot be inferred here", expr.location)
         etype = expected
     else:
-        etype = scope.ctx.namespace.types.get(expr.enum)
-        if not isinstance(etype, EnumType):
+        named = scope.ctx.namespace.types.get(expr.enum)
+        if not isinstance(named, EnumType):
             raise NameLookupError(f"unknown enum type '{expr.enum}'", expr.location)
+        etype = named
     if expr.member not in etype.members:
         raise NameLookupError(f"enum '{etype.name}' has no member '{expr.member}'", expr.location)
     return TypedExpr(model.Const(etype.value(expr.member)), etype, True)
@@ -311,7 +312,9 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
             raise UnsupportedFeatureError(f"not supported: 'keep' on members of variable '{name}'",
                                           nested[name][0].location)
         if name in direct:  # a keep on a variable sets its initial value
-            initial = _kept_value(ctype, name, vdecl.type, None, direct[name])
+            kept = _kept_value(ctype, name, vdecl.type, None, direct[name])
+            assert kept is not None  # direct[name] holds at least one keep
+            initial = kept
         else:
             initial = field_value(ctx, vdecl.type, vdecl.initial, (), member_scope, key, vdecl.location,
                                   f"variable '{name}'")

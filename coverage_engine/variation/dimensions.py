@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import cast
 
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
@@ -120,7 +121,7 @@ def _stored(item: s.Expression, text: str) -> object:
         return item.value
     if isinstance(item, s.UnaryOp) and item.op == "-" and isinstance(item.operand, s.Literal) \
             and item.operand.kind in ("int", "float"):
-        return -item.operand.value
+        return -cast("int | float", item.operand.value)
     return text
 
 
@@ -137,7 +138,7 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
         return None
     _check_in(expr)
     parts = _path(expr.left)
-    assert parts is not None  # checked by _check_in
+    assert parts is not None and isinstance(expr.right, s.ListExpr)  # checked by _check_in
     path = owner + parts[1:] if parts[0] == "it" else parts
     if parts[0] == "it" and owner_target is not None:
         target: tuple = (*owner_target, tuple(parts[1:]))

@@ -28,6 +28,7 @@ import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
@@ -35,8 +36,11 @@ from coverage_engine.parse import syntax
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.template import TextTemplate
 
+if TYPE_CHECKING:
+    from coverage_engine.resolve.model import ScenarioFile
+
 #: ``(concrete text, overrides) -> resolved model``; raises :class:`OscError` when it does not resolve.
-Resolve = Callable[[str, "Mapping | None"], object]
+Resolve = Callable[[str, "Mapping | None"], "ScenarioFile"]
 
 #: Assignment key of the parameter-document dimension.
 DOCUMENT_KEY = "parameter_document"
@@ -193,7 +197,7 @@ def default_resolver(path: Path) -> Resolve:
 
     file, base = str(path), path.parent
 
-    def run(text: str, overrides: Mapping | None) -> object:
+    def run(text: str, overrides: Mapping | None) -> ScenarioFile:
         return resolve(parse_text(text, file), base_dir=base, overrides=overrides)
 
     return run

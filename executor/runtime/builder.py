@@ -31,10 +31,10 @@ from coverage_engine.resolve.model import (
     WaitElapsed,
     WaitEvent,
 )
-from executor.actions.base import ActionError
+from executor.actions.base import ActionError, VariableHandle
 from executor.actions.registry import load_action_class
 from executor.runtime import directives
-from executor.runtime.context import ScenarioContext, ScenarioEnd, VariableHandle
+from executor.runtime.context import ScenarioContext, ScenarioEnd
 from executor.runtime.modifiers import ModifierError, build_modifier
 
 

@@ -15,7 +15,7 @@ from coverage_engine.resolve.evaluate import provide_module
 #: The module name ``helpers.osc`` gives its external methods.
 HELPERS_MODULE = "osc.helpers"
 
-_directories = {"scenario_file": None, "output": None}
+_directories: dict[str, str | None] = {"scenario_file": None, "output": None}
 
 
 def set_directories(scenario_file_directory: str | None, output_directory: str | None) -> None:

@@ -171,7 +171,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
         except SimulationError as exc:
             if output_root:  # CI sees that nothing ran, and why
                 from executor.junit import write_grouped
-                from executor.runtime.results import ScenarioResult
+                from executor.results import ScenarioResult
 
                 write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
                               output_root, request.per_scenario)

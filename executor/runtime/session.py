@@ -15,11 +15,11 @@ import signal
 from collections.abc import Callable
 from contextlib import contextmanager
 
+from executor.results import ScenarioResult
 from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun
-from executor.runtime.results import ScenarioResult
 from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments, simulation_dt
 
 #: The message of a scenario that an abort kept from starting.

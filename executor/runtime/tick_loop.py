@@ -20,9 +20,9 @@ from coverage_engine.errors import OscError
 from coverage_engine.resolve.evaluate import EvaluationError
 from coverage_engine.resolve.model import Scenario
 from executor.actions.base import ActionError
+from executor.results import ScenarioResult
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
-from executor.runtime.results import ScenarioResult
 from executor.simulation import SimulationError, SimulationStepError
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]

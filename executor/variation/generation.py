@@ -32,7 +32,6 @@ from executor.variation.report import echo
 if TYPE_CHECKING:
     from sqlalchemy import Engine
 
-    from coverage_engine.resolve.model import ScenarioFile
     from coverage_engine.variation.output import Generated
     from coverage_engine.variation.plan import Resolve, VariationPlan
 
@@ -205,7 +204,7 @@ class _ModelLog:
 
         plan = self.plan
         try:
-            model: ScenarioFile = self.resolver(plan.concrete_text(item.choices), plan.overrides(item.choices))
+            model = self.resolver(plan.concrete_text(item.choices), plan.overrides(item.choices))
         except OscError as exc:
             echo(f"variant {item.index}: {exc.render()}", err=True)
             return

@@ -59,8 +59,8 @@ def describe(plan: VariationPlan) -> None:
         return
     first_of = {}
     for slot in plan.slots:
-        for dim in slot.dims[1:]:
-            first_of[dim] = slot.dims[0]
+        for later in slot.dims[1:]:
+            first_of[later] = slot.dims[0]
     for i, dim in enumerate(plan.dimensions):
         values = ", ".join(c.text for c in dim.choices)
         joint = ""

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
 import textwrap
 from pathlib import Path
 
 import pytest
+from cli_support import example_library_env
 
 from coverage_engine.errors import (
     ArgumentError,
@@ -246,8 +249,6 @@ EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
-    import subprocess
-
     from coverage_engine.parse.parser import parse_file
 
     unit = parse_file(path)
@@ -261,10 +262,11 @@ def test_every_example_parses_and_resolves(path, tmp_path):
         assert len(variants) > 1 and all(load_scenario_file(v).scenarios for v in variants)
         return
     declares_scenario = any(getattr(d, "kind", None) == "scenario" for d in unit.declarations)
-    needs_example_library = "import osc.example\n" in unit.text
-    if needs_example_library:
-        pytest.importorskip("example_library", reason="examples/example_library is not installed")
-    if declares_scenario:
+    if "import osc.example\n" in unit.text:  # the library of examples/example_library, found by entry point
+        env = dict(os.environ, **example_library_env(tmp_path / "site"))
+        done = subprocess.run(["scenario_execution", "-n", str(path)], capture_output=True, text=True, env=env)
+        assert done.returncode == 0, done.stdout + done.stderr
+    elif declares_scenario:
         assert load_scenario_file(path).scenarios
 
 

@@ -205,4 +205,4 @@ def test_skipping_idle_ticks_changes_nothing(body):
         lines = [line.split("] ", 2)[-1] for line in out.getvalue().splitlines()]
         outcomes.append((summary, sim.steps, lines, runner.ticks))
     assert outcomes[0][:3] == outcomes[1][:3]
-    assert outcomes[0][3] <= outcomes[1][3]
+    assert outcomes[0][3] < outcomes[1][3]  # the same run, in fewer ticks

@@ -13,7 +13,6 @@ shown only with ``-d/--debug``, which the shared option reports here while the c
 from __future__ import annotations
 
 import sys
-import traceback
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -89,6 +88,8 @@ class Boundary:
 
     def _traceback(self) -> None:
         if self.tracebacks:
+            import traceback  # only here: importing it costs a millisecond of every start
+
             traceback.print_exc()
 
     def _say(self, message: str) -> None:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from executor.junit_document import Case, document, suite_element
 from executor.junit_names import file_stem, scenario_classname, variant_name
-from executor.runtime.results import ScenarioResult
+from executor.results import ScenarioResult
 
 RESULT_FILE = "test.xml"
 

@@ -11,6 +11,7 @@ import json
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 from sqlalchemy import Engine, MetaData, Table, inspect, select
 from sqlalchemy.exc import SQLAlchemyError
@@ -53,9 +54,9 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
         table = Table("variants", metadata, autoload_with=engine)
         if "file_path" not in table.c or "assignment" not in table.c:
             return {}
-        columns = [table.c.file_path, table.c.assignment]
+        columns: list[Any] = [table.c.file_path, table.c.assignment]
         columns.append(table.c.scenario if "scenario" in table.c else table.c.file_path.label("no_scenario"))
-        joined = table
+        joined: Any = table
         if "source_id" in table.c and inspector.has_table("source_files"):
             sources = Table("source_files", metadata, autoload_with=engine)
             joined = table.outerjoin(sources, table.c.source_id == sources.c.id)

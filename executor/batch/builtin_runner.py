@@ -175,7 +175,7 @@ class ForkServer:
             process._exited(-signal.SIGKILL)
 
     def _dispatch(self, message: dict) -> None:
-        request_id, event = message.get("id"), message.get("event")
+        request_id, event = str(message.get("id")), message.get("event")
         if event in ("started", "failed"):
             with self._table_lock:
                 pending = self._pending.pop(request_id, None)

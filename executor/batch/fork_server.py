@@ -93,7 +93,7 @@ def preload(main, script: str) -> None:
     import io
     import tempfile
 
-    from coverage_engine.sce import render_sce
+    from coverage_engine.files.sce import render_sce
 
     saved = (list(sys.path), list(sys.argv), sys.stdout, sys.stderr)
     with tempfile.TemporaryDirectory(prefix="scenario_fork_server_") as folder:
@@ -130,9 +130,10 @@ def _fresh_stdio() -> None:
         return io.TextIOWrapper(buffered, encoding=like.encoding, errors=like.errors,
                                 line_buffering=line_buffering or os.isatty(fd), write_through=unbuffered)
 
-    sys.stdin = sys.__stdin__ = stream(0, "r", old["stdin"], False)
-    sys.stdout = sys.__stdout__ = stream(1, "w", old["stdout"], False)
-    sys.stderr = sys.__stderr__ = stream(2, "w", old["stderr"], True)
+    for fd, name, line_buffering in ((0, "stdin", False), (1, "stdout", False), (2, "stderr", True)):
+        fresh = stream(fd, "r" if fd == 0 else "w", old[name], line_buffering)
+        setattr(sys, name, fresh)          # the job's own streams, also as sys.__stdin__ & co.
+        setattr(sys, f"__{name}__", fresh)
 
 
 def _exit_code(exc: SystemExit) -> int:
@@ -206,7 +207,7 @@ class _Server:
         signal.set_wakeup_fd(self.wake_write)
         try:
             while True:
-                ready, _, _ = select.select([self.sock, self.wake_read], [], [])
+                ready, _, _ = select.select([self.sock.fileno(), self.wake_read], [], [])
                 if self.wake_read in ready:
                     try:
                         while os.read(self.wake_read, 512):
@@ -214,7 +215,7 @@ class _Server:
                     except BlockingIOError:
                         pass
                     self._reap()
-                if self.sock in ready:
+                if self.sock.fileno() in ready:
                     message, fds = receive(self.sock, max_fds=1)
                     if message is None:
                         return

@@ -90,7 +90,7 @@ def _peek(path: str) -> str | None:
 def _variant_from_file(path: str) -> VariantInfo | None:
     """A ``.sce`` that the store does not know: its own header says what it is."""
     from coverage_engine.errors import OscError
-    from coverage_engine.sce import parse_sce
+    from coverage_engine.files.sce import parse_sce
 
     text = _peek(path)
     if text is None:

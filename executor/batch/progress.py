@@ -9,10 +9,10 @@ shown live instead of a progress bar). ``NO_COLOR`` keeps the display and drops 
 
 from __future__ import annotations
 
-import os
 import sys
 from typing import TextIO
 
+from executor.terminal import wants_rich
 from store.jobs import Job, JobResult
 from store.states import JobState
 
@@ -113,21 +113,6 @@ class RichReporter(Reporter):
 
     def end(self) -> None:
         self.progress.stop()
-
-
-def wants_rich(stream: TextIO | None = None) -> bool:
-    """Rich display only on a real terminal with a capable ``TERM``.
-
-    ``NO_COLOR`` (no-color.org) asks for no colour, nothing else: the display stays, rich drops its
-    colours (it reads ``NO_COLOR`` itself).
-    """
-    stream = stream or sys.stdout
-    if os.environ.get("TERM") == "dumb":
-        return False
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):
-        return False
 
 
 def make_reporter(slots: int) -> Reporter:

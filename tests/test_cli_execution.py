@@ -162,6 +162,7 @@ def test_kill_9_keeps_the_results_of_finished_scenarios(tmp_path):
 def test_ctrl_c_records_scenarios_that_never_started_as_skipped(tmp_path):
     write(tmp_path, "abc.osc", THREE)
     with start_until(tmp_path, "b started", "abc.osc", "-o", "out") as process:
+        time.sleep(0.5)              # the tick that printed the marker moves on to the wait
         process.send_signal(signal.SIGINT)
         output = process.stdout.read()
         process.wait(timeout=20)

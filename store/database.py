@@ -16,7 +16,11 @@ from sqlalchemy.exc import SQLAlchemyError
 metadata = MetaData()
 
 #: Bumped whenever a table changes in a way older code cannot read.
-SCHEMA_VERSION = 1
+#: 2: per-job coverage (``coverage_schemas``, ``job_coverage`` in :mod:`store.coverage_records`).
+SCHEMA_VERSION = 2
+
+#: Older versions this release upgrades in place: since them, tables were only added (created on first use).
+UPGRADABLE_FROM = frozenset({1})
 
 #: File name of the default SQLite store, kept in the working directory (like coverage.py's ``.coverage``).
 DEFAULT_STORE_FILE = ".scenario_store.db"
@@ -96,6 +100,9 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
             if row is None:
                 conn.execute(store_meta.insert().values(key="schema", value="scenario-coverage",
                                                         schema_version=SCHEMA_VERSION))
+            elif row[0] in UPGRADABLE_FROM:
+                conn.execute(store_meta.update().where(store_meta.c.key == "schema")
+                             .values(schema_version=SCHEMA_VERSION))
             elif row[0] != SCHEMA_VERSION:
                 raise StoreError(
                     f"the store at {engine.url.render_as_string(hide_password=True)} has schema version {row[0]}, "

@@ -1,0 +1,121 @@
+"""Runs of a batch read from the store, as the coverage merge's :class:`RunInput` records.
+
+The store keeps each job's verdict and, when the job wrote a ``coverage.json``, its item declarations
+(shared between jobs) and samples (:mod:`store.coverage_records`). Declarations are decoded and
+validated once per distinct set; per job only its small JSON body is decoded. A job with no coverage
+row still counts for input coverage through its verdict and its variant's assignment (the body's,
+else the ``variants`` record of its scenario file). A job that ran on this host and whose folder
+still holds a ``coverage.json`` the store lacks (a runner that did not record it) is read from there.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+
+from coverage_engine.coverage.errors import RunFileError
+from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
+from coverage_engine.coverage.runs import RunInput, RunSource
+from store.coverage_records import CoverageRecords, StoredRun
+from store.database import StoreError
+from store.queue import QueueStore
+
+#: Job states as run verdicts; queued and running jobs are ``pending`` (not finished).
+_VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error",
+             "cancelled": "skipped", "queued": "pending", "running": "pending"}
+
+
+def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
+    if batch_id is not None:
+        return queue.batch(batch_id)
+    if results is not None:
+        folder = os.path.realpath(results)
+        batch = queue.latest_batch(output_dir=folder)
+        if batch is None:
+            raise StoreError(f"the store {queue.url} holds no batch with output folder {folder} "
+                             f"(give --batch ID, or leave out RESULTS for the latest batch)")
+        return batch
+    batch = queue.latest_batch()
+    if batch is None:
+        raise StoreError(f"the store {queue.url} holds no batch")
+    return batch
+
+
+class _StoreRuns:
+    def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource) -> None:
+        self.records, self.batch_id, self.source = records, batch_id, source
+        self.declarations: dict[int, tuple[ItemDecl, ...] | None] = {}
+        self.pending = 0
+        self.from_disk = 0
+
+    def _decls(self, schema_id: int) -> tuple[ItemDecl, ...] | None:
+        if schema_id not in self.declarations:
+            text = self.records.declarations([schema_id]).get(schema_id)
+            try:
+                self.declarations[schema_id] = parse_declarations(json.loads(text or "[]"), f"store schema {schema_id}")
+            except (RunFileError, ValueError) as exc:
+                self.source.warnings.append(f"{exc} (the jobs that use it count without their items)")
+                self.declarations[schema_id] = None
+        return self.declarations[schema_id]
+
+    def _run(self, row: StoredRun) -> RunInput:
+        verdict = _VERDICTS.get(row.status, "error")
+        if verdict == "pending":
+            self.pending += 1
+        folder = row.output_dir if row.output_dir and os.path.isdir(row.output_dir) else None
+        log = os.path.join(folder, "log.txt") if folder and os.path.isfile(os.path.join(folder, "log.txt")) else None
+        run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder, log=log)
+        assignment: dict = {}
+        if row.body is not None and row.schema_id is not None:
+            decls = self._decls(row.schema_id)
+            body = json.loads(row.body)
+            assignment = body.get("run", {}).get("assignment") or {}
+            if decls is not None:
+                run.items, run.samples, run.ignored = decls, body.get("samples") or [], body.get("ignored") or []
+                run.schema_key = row.schema_id
+        elif folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
+            try:
+                coverage = read_run_coverage(os.path.join(folder, RUN_FILE))
+            except RunFileError as exc:
+                self.source.warnings.append(f"{exc} (its items are left out; the run still counts)")
+            else:
+                self.from_disk += 1
+                run.items, run.samples, run.ignored = coverage.items, coverage.samples, coverage.ignored
+                assignment = dict(coverage.run.assignment)
+        if not assignment and row.variant_assignment:
+            try:
+                value = json.loads(row.variant_assignment)
+                assignment = value if isinstance(value, dict) else {}
+            except ValueError:
+                assignment = {}
+        run.assignment = assignment
+        return run
+
+    def __iter__(self) -> Iterator[RunInput]:
+        try:
+            for row in self.records.iter_batch(self.batch_id):
+                yield self._run(row)
+        finally:
+            self.records.close()
+        if self.pending:
+            self.source.complete = False
+            self.source.notes.append(f"the batch is still running: {self.pending} job(s) have not finished; "
+                                     f"this report covers the finished ones")
+        if self.from_disk:
+            self.source.notes.append(f"{self.from_disk} job(s) had no coverage in the store; read from their "
+                                     f"folders on this host")
+
+
+def store_source(url: str | None, results: str | None = None, batch_id: int | None = None) -> RunSource:
+    """The runs of a batch in the store at ``url``: ``batch_id``, else the latest batch whose output folder
+    is ``results``, else the latest batch."""
+    queue = QueueStore.open(url)
+    try:
+        batch = _pick_batch(queue, results, batch_id)
+    finally:
+        queue.close()
+    records = CoverageRecords.open(url)
+    source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
+    source.runs = iter(_StoreRuns(records, batch.id, source))
+    return source

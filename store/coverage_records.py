@@ -1,0 +1,233 @@
+"""Per-job coverage in the store: what each job's ``coverage.json`` held, so a report needs no shared disk.
+
+Two tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
+
+``coverage_schemas``
+    the item declarations of a ``coverage.json`` (its ``items`` without their samples), stored once per
+    distinct set (keyed by SHA-256): the 100,000 runs of one scenario share one row.
+``job_coverage``
+    one row per job (the latest attempt that wrote a file): the schema's id and a JSON ``body``
+    ``{"run": {...}, "samples": [[...], ...], "ignored": [...]}`` with one list per declared item.
+
+The batch runner calls :meth:`CoverageRecords.record` with the job's document (already read and
+validated by ``coverage_engine.coverage.run_file``) when it records the job's result; reports read
+back with :meth:`CoverageRecords.iter_batch`, in chunks, joined to the job's verdict and, when the
+store has variation records, to the variant's assignment. The store checks nothing about coverage:
+it keeps what it is given (the store imports nothing else of ours).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from sqlalchemy import (
+    Column,
+    Engine,
+    Float,
+    ForeignKey,
+    Integer,
+    String,
+    Table,
+    Text,
+    delete,
+    insert,
+    inspect,
+    select,
+)
+from sqlalchemy.exc import IntegrityError, SQLAlchemyError
+
+from store.database import StoreError, ensure_schema, metadata, open_engine
+from store.queue_tables import QUEUE_TABLES, jobs
+from store.variants import variants
+
+coverage_schemas = Table(
+    "coverage_schemas",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("sha256", String(64), nullable=False, unique=True),
+    Column("items", Text, nullable=False),     # JSON list of item declarations, samples removed
+)
+
+job_coverage = Table(
+    "job_coverage",
+    metadata,
+    Column("job_id", Integer, ForeignKey("jobs.id", ondelete="CASCADE"), primary_key=True),
+    Column("attempt", Integer, nullable=False),
+    Column("schema_id", Integer, ForeignKey("coverage_schemas.id"), nullable=False),
+    Column("body", Text, nullable=False),      # JSON {"run": …, "samples": […], "ignored": […]}
+    Column("recorded_at", Float, nullable=False),
+)
+
+COVERAGE_TABLES = [coverage_schemas, job_coverage]
+
+#: Keys of an item that hold its samples rather than its declaration.
+_SAMPLE_KEYS = ("samples", "ignored")
+
+
+@dataclass(frozen=True)
+class StoredRun:
+    """A job of a batch with its verdict and, if it recorded one, its coverage (JSON texts, not decoded)."""
+
+    seq: int
+    name: str
+    status: str
+    reason: str | None
+    output_dir: str | None
+    scenario_path: str
+    schema_id: int | None
+    body: str | None
+    variant_assignment: str | None
+
+
+def split_document(document: Mapping[str, Any]) -> tuple[str, str]:
+    """``(declarations JSON, body JSON)`` of a coverage document: declarations are shared between runs."""
+    items = document.get("items") or []
+    declarations = [{k: v for k, v in item.items() if k not in _SAMPLE_KEYS} for item in items]
+    body = {"run": document.get("run") or {},
+            "samples": [item.get("samples") or [] for item in items],
+            "ignored": [item.get("ignored") or 0 for item in items]}
+    return (json.dumps(declarations, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
+            json.dumps(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False))
+
+
+def join_document(declarations: Sequence[Mapping[str, Any]], body: Mapping[str, Any],
+                  format_name: str, format_version: int) -> dict[str, Any]:
+    """The coverage document again, from its declarations and body (the inverse of :func:`split_document`)."""
+    items = []
+    for decl, samples, ignored in zip(declarations, body.get("samples") or [], body.get("ignored") or [],
+                                      strict=False):
+        item = dict(decl)
+        if ignored:
+            item["ignored"] = ignored
+        item["samples"] = samples
+        items.append(item)
+    return {"format": format_name, "format_version": format_version, "run": body.get("run") or {}, "items": items}
+
+
+class CoverageRecords:
+    """Coverage rows of jobs: :meth:`record` one, :meth:`iter_batch` read a batch's, :meth:`declarations` share."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self._schema_ids: dict[str, int] = {}
+
+    @classmethod
+    def open(cls, url: str | None = None) -> CoverageRecords:
+        """Open the store at ``url`` and create the queue and coverage tables when missing."""
+        engine = open_engine(url)
+        ensure_schema(engine, QUEUE_TABLES + COVERAGE_TABLES)
+        return cls(engine)
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    @property
+    def url(self) -> str:
+        return self.engine.url.render_as_string(hide_password=True)
+
+    # ------------------------------------------------------------------ writing
+    def _schema_id(self, conn, declarations: str) -> int:
+        digest = hashlib.sha256(declarations.encode("utf-8")).hexdigest()
+        known = self._schema_ids.get(digest)
+        if known is not None:
+            return known
+        found = conn.execute(select(coverage_schemas.c.id).where(coverage_schemas.c.sha256 == digest)).scalar()
+        if found is None:
+            try:
+                with conn.begin_nested():
+                    found = conn.execute(insert(coverage_schemas).values(sha256=digest, items=declarations)
+                                         .returning(coverage_schemas.c.id)).scalar_one()
+            except IntegrityError:   # another writer added it in between
+                found = conn.execute(select(coverage_schemas.c.id)
+                                     .where(coverage_schemas.c.sha256 == digest)).scalar_one()
+        self._schema_ids[digest] = found
+        return found
+
+    def record(self, job_id: int, attempt: int, document: Mapping[str, Any]) -> None:
+        """Keep the coverage ``document`` (a validated ``coverage.json``) of a job's ``attempt``.
+
+        A later attempt of the same job replaces an earlier one; an earlier attempt never replaces a later.
+        """
+        declarations, body = split_document(document)
+        try:
+            with self.engine.begin() as conn:
+                schema_id = self._schema_id(conn, declarations)
+                current = conn.execute(select(job_coverage.c.attempt)
+                                       .where(job_coverage.c.job_id == job_id)).scalar()
+                if current is not None and current > attempt:
+                    return
+                conn.execute(delete(job_coverage).where(job_coverage.c.job_id == job_id))
+                conn.execute(insert(job_coverage).values(job_id=job_id, attempt=attempt, schema_id=schema_id,
+                                                         body=body, recorded_at=time.time()))
+        except SQLAlchemyError as exc:
+            self._schema_ids.clear()
+            raise StoreError(f"cannot record the coverage of job {job_id} in {self.url}: {exc}") from exc
+
+    def record_many(self, rows: Sequence[tuple[int, int, Mapping[str, Any]]]) -> None:
+        """:meth:`record` for many ``(job_id, attempt, document)`` in one transaction (fresh jobs only)."""
+        try:
+            with self.engine.begin() as conn:
+                values = []
+                for job_id, attempt, document in rows:
+                    declarations, body = split_document(document)
+                    values.append(dict(job_id=job_id, attempt=attempt, schema_id=self._schema_id(conn, declarations),
+                                       body=body, recorded_at=time.time()))
+                if values:
+                    conn.execute(delete(job_coverage).where(job_coverage.c.job_id.in_([v["job_id"] for v in values])))
+                    conn.execute(insert(job_coverage), values)
+        except SQLAlchemyError as exc:
+            self._schema_ids.clear()
+            raise StoreError(f"cannot record coverage in {self.url}: {exc}") from exc
+
+    # ------------------------------------------------------------------ reading
+    def declarations(self, schema_ids: Sequence[int]) -> dict[int, str]:
+        """The declarations JSON of each schema id."""
+        ids = sorted(set(schema_ids))
+        out: dict[int, str] = {}
+        with self.engine.connect() as conn:
+            for start in range(0, len(ids), 500):
+                stmt = select(coverage_schemas.c.id, coverage_schemas.c.items).where(
+                    coverage_schemas.c.id.in_(ids[start:start + 500]))
+                out.update({row.id: row.items for row in conn.execute(stmt)})
+        return out
+
+    def document(self, job_id: int, format_name: str, format_version: int) -> dict[str, Any] | None:
+        """The job's coverage document as recorded, or None."""
+        with self.engine.connect() as conn:
+            row = conn.execute(select(job_coverage.c.schema_id, job_coverage.c.body)
+                               .where(job_coverage.c.job_id == job_id)).first()
+        if row is None:
+            return None
+        declarations = json.loads(self.declarations([row.schema_id])[row.schema_id])
+        return join_document(declarations, json.loads(row.body), format_name, format_version)
+
+    def iter_batch(self, batch_id: int, chunk: int = 5000) -> Iterator[StoredRun]:
+        """Every job of a batch in file order, with its coverage row when there is one, read in chunks."""
+        has_variants = inspect(self.engine).has_table(variants.name)
+        assignment = (select(variants.c.assignment).where(variants.c.file_path == jobs.c.scenario_path)
+                      .order_by(variants.c.id.desc()).limit(1).scalar_subquery()) if has_variants else None
+        columns = [jobs.c.seq, jobs.c.name, jobs.c.status, jobs.c.reason, jobs.c.output_dir, jobs.c.scenario_path,
+                   job_coverage.c.schema_id, job_coverage.c.body]
+        if assignment is not None:
+            columns.append(assignment.label("variant_assignment"))
+        last = -1
+        try:
+            while True:
+                stmt = (select(*columns).select_from(jobs.outerjoin(job_coverage, job_coverage.c.job_id == jobs.c.id))
+                        .where(jobs.c.batch_id == batch_id, jobs.c.seq > last).order_by(jobs.c.seq).limit(chunk))
+                with self.engine.connect() as conn:
+                    rows = conn.execute(stmt).all()
+                for row in rows:
+                    yield StoredRun(seq=row[0], name=row[1], status=row[2], reason=row[3], output_dir=row[4],
+                                    scenario_path=row[5], schema_id=row[6], body=row[7],
+                                    variant_assignment=row[8] if assignment is not None else None)
+                if len(rows) < chunk:
+                    return
+                last = rows[-1][0]
+        except SQLAlchemyError as exc:
+            raise StoreError(f"cannot read the coverage of batch {batch_id} from {self.url}: {exc}") from exc

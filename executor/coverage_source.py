@@ -21,6 +21,8 @@ from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
 from store.queue import QueueStore
 
+_decode = json.JSONDecoder().raw_decode
+
 #: Job states as run verdicts; queued and running jobs are ``pending`` (not finished).
 _VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error",
              "cancelled": "skipped", "queued": "pending", "running": "pending"}
@@ -63,18 +65,22 @@ class _StoreRuns:
         verdict = _VERDICTS.get(row.status, "error")
         if verdict == "pending":
             self.pending += 1
-        folder = row.output_dir if row.output_dir and os.path.isdir(row.output_dir) else None
-        log = os.path.join(folder, "log.txt") if folder and os.path.isfile(os.path.join(folder, "log.txt")) else None
-        run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder, log=log)
-        assignment: dict = {}
+        folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
         if row.body is not None and row.schema_id is not None:
-            decls = self._decls(row.schema_id)
-            body = json.loads(row.body)
-            assignment = body.get("run", {}).get("assignment") or {}
-            if decls is not None:
-                run.items, run.samples, run.ignored = decls, body.get("samples") or [], body.get("ignored") or []
-                run.schema_key = row.schema_id
-        elif folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
+            known = self.declarations
+            decls = known[row.schema_id] if row.schema_id in known else self._decls(row.schema_id)
+            body = _decode(row.body)[0]
+            assignment = body.get("assignment")
+            if not assignment and row.variant_assignment:
+                assignment = self._variant(row.variant_assignment)
+            if decls is None:
+                return RunInput(row.name, verdict, row.reason, folder, folder and f"{folder}/log.txt", assignment)
+            return RunInput(row.name, verdict, row.reason, folder, folder and f"{folder}/log.txt", assignment,
+                            decls, body.get("samples", ()), body.get("ignored", ()), row.schema_id, body.get("one"))
+        run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder,
+                       log=os.path.join(folder, "log.txt") if folder else None)
+        assignment: dict = {}
+        if folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
             try:
                 coverage = read_run_coverage(os.path.join(folder, RUN_FILE))
             except RunFileError as exc:
@@ -84,13 +90,18 @@ class _StoreRuns:
                 run.items, run.samples, run.ignored = coverage.items, coverage.samples, coverage.ignored
                 assignment = dict(coverage.run.assignment)
         if not assignment and row.variant_assignment:
-            try:
-                value = json.loads(row.variant_assignment)
-                assignment = value if isinstance(value, dict) else {}
-            except ValueError:
-                assignment = {}
+            assignment = self._variant(row.variant_assignment)
         run.assignment = assignment
         return run
+
+    @staticmethod
+    def _variant(text: str) -> dict:
+        """A ``variants.assignment`` JSON text as a dict ({} when it is not one)."""
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return {}
+        return value if isinstance(value, dict) else {}
 
     def __iter__(self) -> Iterator[RunInput]:
         try:

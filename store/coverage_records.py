@@ -6,8 +6,11 @@ Two tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
     the item declarations of a ``coverage.json`` (its ``items`` without their samples), stored once per
     distinct set (keyed by SHA-256): the 100,000 runs of one scenario share one row.
 ``job_coverage``
-    one row per job (the latest attempt that wrote a file): the schema's id and a JSON ``body``
-    ``{"run": {...}, "samples": [[...], ...], "ignored": [...]}`` with one list per declared item.
+    one row per job (the latest attempt that wrote a file): the schema's id, the ``run`` object (JSON,
+    without its assignment) and a JSON ``body`` with what a report reads: ``{"assignment": {...},
+    "samples": [[...], ...]}`` with one list per declared item — or, when every item has exactly one
+    sample (the common case: sampled once, at the end), ``"one": [v0, v1, ...]``, which decodes about
+    twice as fast — and ``"ignored": [...]`` when an item dropped samples at run time.
 
 The batch runner calls :meth:`CoverageRecords.record` with the job's document (already read and
 validated by ``coverage_engine.coverage.run_file``) when it records the job's result; reports read
@@ -22,8 +25,7 @@ import hashlib
 import json
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from sqlalchemy import (
     Column,
@@ -37,6 +39,7 @@ from sqlalchemy import (
     delete,
     insert,
     inspect,
+    null,
     select,
 )
 from sqlalchemy.exc import IntegrityError, SQLAlchemyError
@@ -50,7 +53,7 @@ coverage_schemas = Table(
     metadata,
     Column("id", Integer, primary_key=True, autoincrement=True),
     Column("sha256", String(64), nullable=False, unique=True),
-    Column("items", Text, nullable=False),     # JSON list of item declarations, samples removed
+    Column("declarations", Text, nullable=False),   # JSON list of item declarations, samples removed
 )
 
 job_coverage = Table(
@@ -59,7 +62,8 @@ job_coverage = Table(
     Column("job_id", Integer, ForeignKey("jobs.id", ondelete="CASCADE"), primary_key=True),
     Column("attempt", Integer, nullable=False),
     Column("schema_id", Integer, ForeignKey("coverage_schemas.id"), nullable=False),
-    Column("body", Text, nullable=False),      # JSON {"run": …, "samples": […], "ignored": […]}
+    Column("run", Text, nullable=False),       # JSON: the run object of the file, without "assignment"
+    Column("body", Text, nullable=False),      # JSON: {"assignment": …, "one" | "samples": …, ["ignored": …]}
     Column("recorded_at", Float, nullable=False),
 )
 
@@ -69,8 +73,7 @@ COVERAGE_TABLES = [coverage_schemas, job_coverage]
 _SAMPLE_KEYS = ("samples", "ignored")
 
 
-@dataclass(frozen=True)
-class StoredRun:
+class StoredRun(NamedTuple):
     """A job of a batch with its verdict and, if it recorded one, its coverage (JSON texts, not decoded)."""
 
     seq: int
@@ -84,29 +87,47 @@ class StoredRun:
     variant_assignment: str | None
 
 
-def split_document(document: Mapping[str, Any]) -> tuple[str, str]:
-    """``(declarations JSON, body JSON)`` of a coverage document: declarations are shared between runs."""
+def split_document(document: Mapping[str, Any]) -> tuple[str, str, str]:
+    """``(declarations, run, body)`` JSON texts of a coverage document; declarations are shared between runs."""
     items = document.get("items") or []
     declarations = [{k: v for k, v in item.items() if k not in _SAMPLE_KEYS} for item in items]
-    body = {"run": document.get("run") or {},
-            "samples": [item.get("samples") or [] for item in items],
-            "ignored": [item.get("ignored") or 0 for item in items]}
-    return (json.dumps(declarations, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
-            json.dumps(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False))
+    run = dict(document.get("run") or {})
+    body: dict[str, Any] = {"assignment": run.pop("assignment", None) or {}}
+    samples = [item.get("samples") or [] for item in items]
+    if all(len(values) == 1 for values in samples):
+        body["one"] = [values[0] for values in samples]
+    else:
+        body["samples"] = samples
+    ignored = [item.get("ignored") or 0 for item in items]
+    if any(ignored):
+        body["ignored"] = ignored
+    dump = json.dumps
+    return (dump(declarations, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
+            dump(run, separators=(",", ":"), ensure_ascii=False, allow_nan=False),
+            dump(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False))
 
 
-def join_document(declarations: Sequence[Mapping[str, Any]], body: Mapping[str, Any],
+def body_samples(body: Mapping[str, Any]) -> list[list]:
+    """The per-item sample lists of a decoded ``body`` (either encoding)."""
+    if "one" in body:
+        return [[value] for value in body["one"]]
+    return list(body.get("samples") or [])
+
+
+def join_document(declarations: Sequence[Mapping[str, Any]], run: Mapping[str, Any], body: Mapping[str, Any],
                   format_name: str, format_version: int) -> dict[str, Any]:
-    """The coverage document again, from its declarations and body (the inverse of :func:`split_document`)."""
+    """The coverage document again, from its three parts (the inverse of :func:`split_document`)."""
+    samples = body_samples(body)
+    ignored = body.get("ignored") or [0] * len(samples)
     items = []
-    for decl, samples, ignored in zip(declarations, body.get("samples") or [], body.get("ignored") or [],
-                                      strict=False):
+    for decl, values, dropped in zip(declarations, samples, ignored, strict=False):
         item = dict(decl)
-        if ignored:
-            item["ignored"] = ignored
-        item["samples"] = samples
+        if dropped:
+            item["ignored"] = dropped
+        item["samples"] = values
         items.append(item)
-    return {"format": format_name, "format_version": format_version, "run": body.get("run") or {}, "items": items}
+    return {"format": format_name, "format_version": format_version,
+            "run": {**run, "assignment": body.get("assignment") or {}}, "items": items}
 
 
 class CoverageRecords:
@@ -140,7 +161,7 @@ class CoverageRecords:
         if found is None:
             try:
                 with conn.begin_nested():
-                    found = conn.execute(insert(coverage_schemas).values(sha256=digest, items=declarations)
+                    found = conn.execute(insert(coverage_schemas).values(sha256=digest, declarations=declarations)
                                          .returning(coverage_schemas.c.id)).scalar_one()
             except IntegrityError:   # another writer added it in between
                 found = conn.execute(select(coverage_schemas.c.id)
@@ -153,7 +174,7 @@ class CoverageRecords:
 
         A later attempt of the same job replaces an earlier one; an earlier attempt never replaces a later.
         """
-        declarations, body = split_document(document)
+        declarations, run, body = split_document(document)
         try:
             with self.engine.begin() as conn:
                 schema_id = self._schema_id(conn, declarations)
@@ -163,7 +184,7 @@ class CoverageRecords:
                     return
                 conn.execute(delete(job_coverage).where(job_coverage.c.job_id == job_id))
                 conn.execute(insert(job_coverage).values(job_id=job_id, attempt=attempt, schema_id=schema_id,
-                                                         body=body, recorded_at=time.time()))
+                                                         run=run, body=body, recorded_at=time.time()))
         except SQLAlchemyError as exc:
             self._schema_ids.clear()
             raise StoreError(f"cannot record the coverage of job {job_id} in {self.url}: {exc}") from exc
@@ -174,9 +195,9 @@ class CoverageRecords:
             with self.engine.begin() as conn:
                 values = []
                 for job_id, attempt, document in rows:
-                    declarations, body = split_document(document)
+                    declarations, run, body = split_document(document)
                     values.append(dict(job_id=job_id, attempt=attempt, schema_id=self._schema_id(conn, declarations),
-                                       body=body, recorded_at=time.time()))
+                                       run=run, body=body, recorded_at=time.time()))
                 if values:
                     conn.execute(delete(job_coverage).where(job_coverage.c.job_id.in_([v["job_id"] for v in values])))
                     conn.execute(insert(job_coverage), values)
@@ -191,20 +212,20 @@ class CoverageRecords:
         out: dict[int, str] = {}
         with self.engine.connect() as conn:
             for start in range(0, len(ids), 500):
-                stmt = select(coverage_schemas.c.id, coverage_schemas.c.items).where(
+                stmt = select(coverage_schemas.c.id, coverage_schemas.c.declarations).where(
                     coverage_schemas.c.id.in_(ids[start:start + 500]))
-                out.update({row.id: row.items for row in conn.execute(stmt)})
+                out.update({row[0]: row[1] for row in conn.execute(stmt)})
         return out
 
     def document(self, job_id: int, format_name: str, format_version: int) -> dict[str, Any] | None:
         """The job's coverage document as recorded, or None."""
         with self.engine.connect() as conn:
-            row = conn.execute(select(job_coverage.c.schema_id, job_coverage.c.body)
+            row = conn.execute(select(job_coverage.c.schema_id, job_coverage.c.run, job_coverage.c.body)
                                .where(job_coverage.c.job_id == job_id)).first()
         if row is None:
             return None
-        declarations = json.loads(self.declarations([row.schema_id])[row.schema_id])
-        return join_document(declarations, json.loads(row.body), format_name, format_version)
+        declarations = json.loads(self.declarations([row[0]])[row[0]])
+        return join_document(declarations, json.loads(row[1]), json.loads(row[2]), format_name, format_version)
 
     def iter_batch(self, batch_id: int, chunk: int = 5000) -> Iterator[StoredRun]:
         """Every job of a batch in file order, with its coverage row when there is one, read in chunks."""
@@ -213,8 +234,8 @@ class CoverageRecords:
                       .order_by(variants.c.id.desc()).limit(1).scalar_subquery()) if has_variants else None
         columns = [jobs.c.seq, jobs.c.name, jobs.c.status, jobs.c.reason, jobs.c.output_dir, jobs.c.scenario_path,
                    job_coverage.c.schema_id, job_coverage.c.body]
-        if assignment is not None:
-            columns.append(assignment.label("variant_assignment"))
+        columns.append(assignment.label("variant_assignment") if assignment is not None
+                       else null().label("variant_assignment"))
         last = -1
         try:
             while True:
@@ -222,10 +243,7 @@ class CoverageRecords:
                         .where(jobs.c.batch_id == batch_id, jobs.c.seq > last).order_by(jobs.c.seq).limit(chunk))
                 with self.engine.connect() as conn:
                     rows = conn.execute(stmt).all()
-                for row in rows:
-                    yield StoredRun(seq=row[0], name=row[1], status=row[2], reason=row[3], output_dir=row[4],
-                                    scenario_path=row[5], schema_id=row[6], body=row[7],
-                                    variant_assignment=row[8] if assignment is not None else None)
+                yield from map(StoredRun._make, rows)
                 if len(rows) < chunk:
                     return
                 last = rows[-1][0]

@@ -15,7 +15,9 @@ Four kinds of bucketing, chosen from an item's declaration:
 * **cross** — a tuple of component keys; the buckets are the product of the components' buckets.
 
 A *key* is what the merge counts under while runs stream in (a bucket index, a member name, a value,
-a tuple); :meth:`finish` maps the keys seen to the final, ordered list of :class:`Bucket`.
+a tuple); :meth:`finish` maps the keys seen to the final, ordered list of :class:`Bucket`. ``keys``
+computes the keys of a whole column of values at once, with C-level ``map`` where it can (the merge
+calls it once per item and chunk of runs, not once per sample).
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ from __future__ import annotations
 import math
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
+from itertools import repeat
+from operator import floordiv, sub
 
 from coverage_engine.coverage.values import ValueType
 
@@ -99,12 +103,23 @@ class RangeBuckets:
         self.low, self.high = low, high
         self.every = every if every is not None else default_every(value_kind, low, high)
         self.count = range_bucket_count(value_kind, low, high, self.every)
+        # Whether the buckets end exactly at ``high`` (then only ``high`` itself needs a second look).
+        span = (int(high) - int(low) + 1) if self.integer else (high - low)
+        self._aligned = span == self.count * self.every
 
     def key(self, value: float) -> int | None:
         if value < self.low or value > self.high:
             return None
         index = int((value - self.low) // self.every)
         return index if index < self.count else self.count - 1
+
+    def keys(self, values: list) -> list:
+        raw = list(map(floordiv, map(sub, values, repeat(self.low)), repeat(self.every)))
+        last = self.count - 1
+        if raw and min(raw) >= 0 and max(raw) < (self.count if self._aligned else last):
+            return raw
+        key = self.key   # below the range, or in the last bucket (which may end before a full width)
+        return [i if 0 <= i < last else key(v) for v, i in zip(values, raw, strict=True)]
 
     def buckets(self) -> list[Bucket]:
         out = []
@@ -132,9 +147,13 @@ class MemberBuckets:
     def __init__(self, members: Sequence[object]) -> None:
         self.members = tuple(members)
         self._index = {m: i for i, m in enumerate(self.members)}
+        self._same = {m: m for m in self.members}
 
     def key(self, value: object) -> object | None:
         return value if value in self._index and type(value) is type(self.members[0]) else None
+
+    def keys(self, values: list) -> list:
+        return list(map(self._same.get, values))   # samples were checked against the type when read
 
     def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
         return [Bucket(value_label(m), value=m) for m in self.members], dict(self._index)
@@ -155,6 +174,9 @@ class DistinctBuckets:
 
     def key(self, value: object) -> object:
         return value
+
+    def keys(self, values: list) -> list:
+        return values
 
     def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
         ordered = _sort_values(list(keys))
@@ -193,6 +215,14 @@ class CrossBuckets:
                 return None
             keys.append(k)
         return tuple(keys)
+
+    def keys(self, values: list) -> list:
+        """Tuples of the components' keys; a tuple holding None (a part outside its buckets) is ignored."""
+        if not values:
+            return []
+        columns = [component.keys(list(column)) for component, column in
+                   zip(self.components, zip(*values, strict=True), strict=True)]
+        return list(zip(*columns, strict=True)) if columns else []
 
 
 Bucketing = RangeBuckets | MemberBuckets | DistinctBuckets | CrossBuckets

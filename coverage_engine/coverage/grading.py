@@ -8,10 +8,13 @@ plan (weight 1 by default, 0 leaves an item out). Record items have no grade. A 
 
 from __future__ import annotations
 
+import gc
 import math
 import re
 import statistics
+from array import array
 from collections.abc import Hashable
+from itertools import islice
 
 from coverage_engine.coverage.merge import CoverageMerger, ItemCounts
 from coverage_engine.coverage.model import (
@@ -29,6 +32,9 @@ from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
 #: Most cells a cross may have to be graded and drawn.
 MAX_CROSS_CELLS = 10_000
 
+#: Runs merged together (column by column); bounds the memory a chunk holds.
+CHUNK_RUNS = 2000
+
 #: Values of a non-numeric record item listed.
 TOP_VALUES = 10
 
@@ -41,19 +47,18 @@ def natural_key(name: str) -> list:
 class _Buckets:
     """Builds :class:`BucketResult` records; failing runs are listed in natural order of their names."""
 
-    def __init__(self, names: list[str]) -> None:
-        self.names = names
-        self.keys: dict[int, list] = {}
+    def __init__(self, names: list[str], verdicts: list[str]) -> None:
+        failing = [i for i, v in enumerate(verdicts) if v in ("failed", "error")]
+        failing.sort(key=lambda i: natural_key(names[i]))
+        self.rank = array("q", range(len(names)))    # runs that did not fail keep their own order
+        for position, run in enumerate(failing):
+            self.rank[run] = position - len(failing)
 
     def order(self, runs: list[int]) -> tuple[int, ...]:
         unique = set(runs)
         if len(unique) < 2:
             return tuple(unique)
-        keys = self.keys
-        for run in unique:
-            if run not in keys:
-                keys[run] = natural_key(self.names[run])
-        return tuple(sorted(unique, key=keys.__getitem__))
+        return tuple(sorted(unique, key=self.rank.__getitem__))
 
     def make(self, label: str, stats: list[int], failing: list[int], target: int, low=None, high=None) -> BucketResult:
         return BucketResult(label=label, hits=stats[0], passed=stats[1], failed=stats[2], errored=stats[3],
@@ -151,7 +156,8 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         notes.append(f"more than {counts.limit} distinct values: {counts.overflow} sample(s) of new values ignored "
                      f"(give the item a range)")
     if counts.conflicts:
-        notes.append(f"{counts.conflicts} run(s) declared it differently; their samples are left out")
+        notes.append("some runs declared it differently (type, unit, range, every or items); their samples "
+                     "are left out")
     if counts.kind != "record" and not buckets and not notes:
         notes.append("no sample")
     value_type = decl.value_type if decl is not None else None
@@ -181,9 +187,9 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
     plan = plan or CoveragePlan()
     order = {kind: i for i, kind in enumerate(KIND_ORDER)}
     counted = sorted(merger.items.values(), key=lambda c: order[c.kind])   # stable: first seen within a kind
-    make = _Buckets(merger.run_names)
+    make = _Buckets(merger.run_names, merger.run_verdicts)
     items = [_item(c, plan, make) for c in counted]
-    warnings = list(warnings or ()) + list(merger.warnings)
+    warnings = list(warnings or ()) + merger.finish_warnings()
     for entry in plan.unmatched([c.name for c in counted]):
         warnings.append(f"the plan names '{entry}', which matches no item")
     verdicts = {v: 0 for v in REPORT_VERDICTS}
@@ -200,8 +206,14 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
 def build_report(source: RunSource, plan: CoveragePlan | None = None) -> CoverageReport:
     """Read every run of ``source`` and grade them: the one entry point of every report."""
     merger = CoverageMerger()
-    add = merger.add
-    for run in source.runs:  # type: ignore[attr-defined]
-        add(run)
+    collecting = gc.isenabled()
+    gc.disable()   # the merge makes many small containers and no cycles: generational passes only cost time
+    try:
+        runs = iter(source.runs)  # type: ignore[call-overload]
+        while chunk := list(islice(runs, CHUNK_RUNS)):
+            merger.add_chunk(chunk)
+    finally:
+        if collecting:
+            gc.enable()
     return grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
                  root=source.root, warnings=source.warnings)

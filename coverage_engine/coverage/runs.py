@@ -23,6 +23,7 @@ class RunInput:
 
     ``schema_key`` may name the item declarations (``items``) shared by many runs, so the merge
     matches them to its items once instead of once per run (the store keeps declarations that way).
+    ``single`` may replace ``samples`` when every item has exactly one sample: one value per item.
     """
 
     name: str
@@ -35,6 +36,7 @@ class RunInput:
     samples: Sequence[list] = ()
     ignored: Sequence[int] = ()
     schema_key: Hashable | None = None
+    single: Sequence | None = None
 
 
 @dataclass

@@ -105,7 +105,6 @@ class _Page:
                 f'<circle cx="56" cy="56" r="{radius}" fill="none" stroke="{_grade_colour(grade)}" '
                 f'stroke-width="{stroke}" stroke-linecap="round" stroke-dasharray="{filled:.2f} {circumference:.2f}" '
                 f'transform="rotate(-90 56 56)"/>'
-                f'<text x="56" y="63" text-anchor="middle" font-size="22" fill="#1c2430">{escape(label)}</text>'
                 f'</svg>')
 
     def cards(self) -> str:
@@ -119,7 +118,6 @@ class _Page:
         graded = [i for i in report.items if i.graded]
         holes = report.holes_count()
         with_holes = sum(1 for i in graded if i.holes)
-        records = len(report.items_of("record"))
         finished = counts.get("passed", 0) + counts.get("failed", 0) + counts.get("error", 0)
         rate = None if finished == 0 else 100 * counts.get("passed", 0) / finished
         plan = f'<div class="muted">plan: {escape(report.plan_file)}</div>' if report.plan_file else ""
@@ -133,7 +131,7 @@ class _Page:
             f'<div class="card"><h3>Holes</h3><div class="big" style="color:{"var(--poor)" if holes else "var(--good)"}">'
             f'{holes}</div><div class="muted">bucket(s) never reached, in {with_holes} of {len(graded)} item(s)</div></div>'
             f'<div class="card"><h3>Pass rate</h3><div class="big">{_pct(rate)}</div>'
-            f'<div class="muted">of {finished} finished run(s); {records} record item(s)</div></div>'
+            f'<div class="muted">of {finished} run(s) that finished</div></div>'
             '</div>')
 
     def callouts(self) -> str:

@@ -60,8 +60,11 @@ def _summary(report: CoverageReport, style: _Style) -> list:
     head = Text()
     head.append("Scenario coverage", style=None if style.plain else "bold")
     head.append(f" of {report.source}: {len(report.runs)} run(s)" + (f" ({', '.join(parts)})" if parts else ""))
-    state = "complete" if report.complete else "INCOMPLETE: the batch is still running or was stopped"
-    head.append("  [" + state + "]", style=None if style.plain else ("green" if report.complete else "bold yellow"))
+    if report.complete:
+        head.append("  [complete]", style=None if style.plain else "green")
+    else:
+        head.append("\nINCOMPLETE: the batch is still running or was stopped; the finished runs are covered",
+                    style=None if style.plain else "bold yellow")
     grade = Text("Overall grade ")
     grade.append(percent(report.grade), style=None if style.plain else f"bold {style.grade_colour(report.grade)}")
     grade.append("  ")

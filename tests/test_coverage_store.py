@@ -1,0 +1,83 @@
+"""Per-job coverage in the store, on SQLite and PostgreSQL: record, replace, read back with the verdicts."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+
+import pytest
+
+from store.coverage_records import CoverageRecords, coverage_schemas
+from store.database import SCHEMA_VERSION, ensure_schema, open_engine
+from store.jobs import BatchOptions, JobResult, JobSpec, WorkerIdentity
+from store.queue import QueueStore
+from store.states import JobState
+
+pytest_plugins = ["batch_stores"]
+
+
+def _document(value: float, verdict: str = "passed", samples: list | None = None) -> dict:
+    return {"format": "scenario-coverage/run", "format_version": 1,
+            "run": {"scenario": "s", "verdict": verdict, "assignment": {"s.x": value}},
+            "items": [{"name": "v", "kind": "cover", "path": "s", "type": "float", "range": [0, 10], "every": 5,
+                       "samples": samples if samples is not None else [value]},
+                      {"name": "t", "kind": "record", "path": "s", "type": "float", "ignored": 1, "samples": [1.0]}]}
+
+
+def _batch(url: str, names: list[str]):
+    queue = QueueStore.open(url)
+    batch = queue.create_batch(mode="local", input_dir="/in", output_dir="/out", host="h", command=["x"],
+                               options=BatchOptions(), specs=[JobSpec(n, f"/in/{n}.sce", "0") for n in names])
+    return queue, batch
+
+
+def test_record_and_read_back_a_batchs_coverage(store_url):
+    queue, batch = _batch(store_url, ["a", "b", "c"])
+    worker = WorkerIdentity.current()
+    claimed = queue.claim(worker, limit=2, batch_id=batch.id)
+    records = CoverageRecords.open(store_url)
+    for job, value in zip(claimed, (2.0, 7.0), strict=True):
+        queue.finish(job, JobResult(JobState.PASSED, 0, 1.0, 2.0))
+        records.record(job.id, job.attempts, _document(value))
+    rows = list(records.iter_batch(batch.id, chunk=2))         # chunked reading crosses a chunk border
+    assert [(r.name, r.status) for r in rows] == [("a", "passed"), ("b", "passed"), ("c", "queued")]
+    assert rows[2].body is None and rows[0].schema_id == rows[1].schema_id     # one declaration set, shared
+    assert json.loads(rows[1].body) == {"assignment": {"s.x": 7.0}, "one": [7.0, 1.0], "ignored": [0, 1]}
+    assert records.document(claimed[0].id, "scenario-coverage/run", 1) == _document(2.0)
+    with records.engine.connect() as conn:
+        assert conn.execute(coverage_schemas.select()).all().__len__() == 1
+    records.close()
+    queue.close()
+
+
+def test_a_later_attempt_replaces_an_earlier_one_never_the_reverse(store_url):
+    queue, batch = _batch(store_url, ["a"])
+    job = queue.jobs(batch.id)[0]
+    records = CoverageRecords.open(store_url)
+    records.record(job.id, 2, _document(3.0, samples=[3.0, 4.0]))
+    records.record(job.id, 1, _document(9.0))
+    assert records.document(job.id, "f", 1)["items"][0]["samples"] == [3.0, 4.0]
+    records.record(job.id, 3, _document(6.0))
+    assert records.document(job.id, "f", 1)["run"]["assignment"] == {"s.x": 6.0}
+    records.close()
+    queue.close()
+
+
+def test_a_version_1_store_is_upgraded_in_place(tmp_path):
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    queue, batch = _batch(url, ["a"])
+    queue.close()
+    with sqlite3.connect(tmp_path / "old.db") as conn:
+        conn.execute("UPDATE store_meta SET schema_version = 1")
+        conn.execute("DROP TABLE IF EXISTS job_coverage")
+    records = CoverageRecords.open(url)
+    records.record(1, 1, _document(1.0))
+    records.close()
+    with sqlite3.connect(tmp_path / "old.db") as conn:
+        assert conn.execute("SELECT schema_version FROM store_meta").fetchone() == (SCHEMA_VERSION,)
+    with sqlite3.connect(tmp_path / "old.db") as conn:
+        conn.execute("UPDATE store_meta SET schema_version = 99")
+    from store.database import StoreError
+
+    with pytest.raises(StoreError, match="schema version 99"):
+        ensure_schema(open_engine(url))

@@ -47,18 +47,23 @@ def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
 class _StoreRuns:
     def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource) -> None:
         self.records, self.batch_id, self.source = records, batch_id, source
-        self.declarations: dict[int, tuple[ItemDecl, ...] | None] = {}
+        self.declarations: dict[int, tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]] = {}
         self.pending = 0
         self.from_disk = 0
 
-    def _decls(self, schema_id: int) -> tuple[ItemDecl, ...] | None:
+    def _schema(self, schema_id: int) -> tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]:
+        """The item declarations (None when they do not validate) and parameter names of a stored schema."""
         if schema_id not in self.declarations:
             text = self.records.declarations([schema_id]).get(schema_id)
+            decls: tuple[ItemDecl, ...] | None = None
+            parameters: tuple[str, ...] = ()
             try:
-                self.declarations[schema_id] = parse_declarations(json.loads(text or "[]"), f"store schema {schema_id}")
-            except (RunFileError, ValueError) as exc:
+                shared = json.loads(text or "{}")
+                parameters = tuple(str(p) for p in shared.get("parameters") or ())
+                decls = parse_declarations(shared.get("items") or [], f"store schema {schema_id}")
+            except (RunFileError, ValueError, AttributeError) as exc:
                 self.source.warnings.append(f"{exc} (the jobs that use it count without their items)")
-                self.declarations[schema_id] = None
+            self.declarations[schema_id] = (decls, parameters)
         return self.declarations[schema_id]
 
     def _run(self, row: StoredRun) -> RunInput:
@@ -68,15 +73,19 @@ class _StoreRuns:
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
         if row.body is not None and row.schema_id is not None:
             known = self.declarations
-            decls = known[row.schema_id] if row.schema_id in known else self._decls(row.schema_id)
-            body = _decode(row.body)[0]
-            assignment = body.get("assignment")
-            if not assignment and row.variant_assignment:
+            decls, parameters = known[row.schema_id] if row.schema_id in known else self._schema(row.schema_id)
+            values, one, samples, ignored = _decode(row.body)[0]
+            log = folder and f"{folder}/log.txt"
+            if not parameters and row.variant_assignment:
                 assignment = self._variant(row.variant_assignment)
+                parameters = values = None
+            else:
+                assignment = {}
             if decls is None:
-                return RunInput(row.name, verdict, row.reason, folder, folder and f"{folder}/log.txt", assignment)
-            return RunInput(row.name, verdict, row.reason, folder, folder and f"{folder}/log.txt", assignment,
-                            decls, body.get("samples", ()), body.get("ignored", ()), row.schema_id, body.get("one"))
+                return RunInput(row.name, verdict, row.reason, folder, log, assignment,
+                                parameters=parameters or None, values=values)
+            return RunInput(row.name, verdict, row.reason, folder, log, assignment, decls, samples or (),
+                            ignored or (), row.schema_id, one, parameters or None, values)
         run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder,
                        log=os.path.join(folder, "log.txt") if folder else None)
         assignment: dict = {}

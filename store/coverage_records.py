@@ -3,14 +3,16 @@
 Two tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
 
 ``coverage_schemas``
-    the item declarations of a ``coverage.json`` (its ``items`` without their samples), stored once per
-    distinct set (keyed by SHA-256): the 100,000 runs of one scenario share one row.
+    what runs of one scenario share, stored once per distinct set (keyed by SHA-256), as JSON
+    ``{"parameters": [names of the assignment], "items": [item declarations without samples]}``:
+    the 100,000 runs of one scenario share one row.
 ``job_coverage``
     one row per job (the latest attempt that wrote a file): the schema's id, the ``run`` object (JSON,
-    without its assignment) and a JSON ``body`` with what a report reads: ``{"assignment": {...},
-    "samples": [[...], ...]}`` with one list per declared item — or, when every item has exactly one
-    sample (the common case: sampled once, at the end), ``"one": [v0, v1, ...]``, which decodes about
-    twice as fast — and ``"ignored": [...]`` when an item dropped samples at run time.
+    without its assignment) and a JSON ``body`` with just what a report reads, keyless so it decodes
+    fast: ``[values, one, samples, ignored]`` — the assignment's values in the schema's parameter
+    order; then either ``one`` (every item has exactly one sample, the common case: one value per item)
+    or ``samples`` (one list per item), the other null; and ``ignored`` (per item, the samples dropped
+    at run time) or null when none were.
 
 The batch runner calls :meth:`CoverageRecords.record` with the job's document (already read and
 validated by ``coverage_engine.coverage.run_file``) when it records the job's result; reports read
@@ -53,7 +55,7 @@ coverage_schemas = Table(
     metadata,
     Column("id", Integer, primary_key=True, autoincrement=True),
     Column("sha256", String(64), nullable=False, unique=True),
-    Column("declarations", Text, nullable=False),   # JSON list of item declarations, samples removed
+    Column("declarations", Text, nullable=False),   # JSON {"parameters": [...], "items": [declarations]}
 )
 
 job_coverage = Table(
@@ -63,7 +65,7 @@ job_coverage = Table(
     Column("attempt", Integer, nullable=False),
     Column("schema_id", Integer, ForeignKey("coverage_schemas.id"), nullable=False),
     Column("run", Text, nullable=False),       # JSON: the run object of the file, without "assignment"
-    Column("body", Text, nullable=False),      # JSON: {"assignment": …, "one" | "samples": …, ["ignored": …]}
+    Column("body", Text, nullable=False),      # JSON: [values, one, samples, ignored]
     Column("recorded_at", Float, nullable=False),
 )
 
@@ -90,44 +92,37 @@ class StoredRun(NamedTuple):
 def split_document(document: Mapping[str, Any]) -> tuple[str, str, str]:
     """``(declarations, run, body)`` JSON texts of a coverage document; declarations are shared between runs."""
     items = document.get("items") or []
-    declarations = [{k: v for k, v in item.items() if k not in _SAMPLE_KEYS} for item in items]
     run = dict(document.get("run") or {})
-    body: dict[str, Any] = {"assignment": run.pop("assignment", None) or {}}
+    assignment = run.pop("assignment", None) or {}
+    shared = {"parameters": list(assignment),
+              "items": [{k: v for k, v in item.items() if k not in _SAMPLE_KEYS} for item in items]}
     samples = [item.get("samples") or [] for item in items]
-    if all(len(values) == 1 for values in samples):
-        body["one"] = [values[0] for values in samples]
-    else:
-        body["samples"] = samples
+    one = [values[0] for values in samples] if all(len(values) == 1 for values in samples) else None
     ignored = [item.get("ignored") or 0 for item in items]
-    if any(ignored):
-        body["ignored"] = ignored
+    body = [list(assignment.values()), one, None if one is not None else samples, ignored if any(ignored) else None]
     dump = json.dumps
-    return (dump(declarations, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
+    return (dump(shared, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
             dump(run, separators=(",", ":"), ensure_ascii=False, allow_nan=False),
             dump(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False))
 
 
-def body_samples(body: Mapping[str, Any]) -> list[list]:
-    """The per-item sample lists of a decoded ``body`` (either encoding)."""
-    if "one" in body:
-        return [[value] for value in body["one"]]
-    return list(body.get("samples") or [])
-
-
-def join_document(declarations: Sequence[Mapping[str, Any]], run: Mapping[str, Any], body: Mapping[str, Any],
+def join_document(shared: Mapping[str, Any], run: Mapping[str, Any], body: Sequence[Any],
                   format_name: str, format_version: int) -> dict[str, Any]:
     """The coverage document again, from its three parts (the inverse of :func:`split_document`)."""
-    samples = body_samples(body)
-    ignored = body.get("ignored") or [0] * len(samples)
+    values, one, samples, ignored = body
+    if one is not None:
+        samples = [[value] for value in one]
+    ignored = ignored or [0] * len(samples)
     items = []
-    for decl, values, dropped in zip(declarations, samples, ignored, strict=False):
+    for decl, item_samples, dropped in zip(shared["items"], samples, ignored, strict=False):
         item = dict(decl)
         if dropped:
             item["ignored"] = dropped
-        item["samples"] = values
+        item["samples"] = item_samples
         items.append(item)
-    return {"format": format_name, "format_version": format_version,
-            "run": {**run, "assignment": body.get("assignment") or {}}, "items": items}
+    assignment = dict(zip(shared["parameters"], values, strict=False))
+    return {"format": format_name, "format_version": format_version, "run": {**run, "assignment": assignment},
+            "items": items}
 
 
 class CoverageRecords:

@@ -42,7 +42,7 @@ def test_record_and_read_back_a_batchs_coverage(store_url):
     rows = list(records.iter_batch(batch.id, chunk=2))         # chunked reading crosses a chunk border
     assert [(r.name, r.status) for r in rows] == [("a", "passed"), ("b", "passed"), ("c", "queued")]
     assert rows[2].body is None and rows[0].schema_id == rows[1].schema_id     # one declaration set, shared
-    assert json.loads(rows[1].body) == {"assignment": {"s.x": 7.0}, "one": [7.0, 1.0], "ignored": [0, 1]}
+    assert json.loads(rows[1].body) == [[7.0], [7.0, 1.0], None, [0, 1]]     # values, one, samples, ignored
     assert records.document(claimed[0].id, "scenario-coverage/run", 1) == _document(2.0)
     with records.engine.connect() as conn:
         assert conn.execute(coverage_schemas.select()).all().__len__() == 1

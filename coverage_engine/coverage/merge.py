@@ -207,13 +207,23 @@ class CoverageMerger:
         schemas: dict[tuple, list[int]] = {}
         for i, run in enumerate(runs):
             slot = SLOTS.get(run.verdict)
-            if run.assignment:
-                inputs.setdefault((tuple(run.assignment), slot), []).append(i)
+            if run.parameters:
+                inputs.setdefault((run.parameters, slot, True), []).append(i)
+            elif run.assignment:
+                inputs.setdefault((tuple(run.assignment), slot, False), []).append(i)
             if run.items and (slot is not None or run.verdict == "skipped"):   # a pending run's samples are not final
                 key = run.schema_key if run.schema_key is not None else tuple(run.items)
                 schemas.setdefault((key, slot, run.single is not None), []).append(i)
-        for (keys, slot), members in inputs.items():
-            self._add_inputs(keys, slot, [runs[i].assignment for i in members], [base + i for i in members])
+        for (keys, slot, listed), members in inputs.items():
+            plan = self._inputs.get(keys) or self._input_plan(keys)
+            if listed:
+                rows = [runs[i].values for i in members]
+                if any(len(row) != len(keys) for row in rows):   # type: ignore[arg-type]
+                    self._malformed += len(rows)
+                    continue
+            else:
+                rows = list(map(plan.getter, [runs[i].assignment for i in members]))
+            self._add_inputs(plan, slot, rows, [base + i for i in members])
         for (key, slot, _single), members in schemas.items():
             group = [runs[i] for i in members]
             targets = self._schemas.get(key)
@@ -221,9 +231,8 @@ class CoverageMerger:
                 targets = self._schemas[key] = self._match(group[0].items, group[0].name)
             self._add_samples(targets, group, slot, [base + i for i in members])
 
-    def _add_inputs(self, keys: tuple[str, ...], slot: int | None, assignments: list, rids: list[int]) -> None:
-        plan = self._inputs.get(keys) or self._input_plan(keys)
-        rows = list(map(plan.getter, assignments))
+    @staticmethod
+    def _add_inputs(plan: _InputPlan, slot: int | None, rows: list, rids: list[int]) -> None:
         columns = list(zip(*rows, strict=True))
         for counts, column in zip(plan.items, columns, strict=True):
             counts.add_inputs(list(column), rids, slot)

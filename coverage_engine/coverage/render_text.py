@@ -247,7 +247,9 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
             console.print(grid)
         elif item.buckets:
             console.print(_bucket_table(item, names, style))
-        holes = _holes(item, style)
+        holes = _holes(item, style) if grid is None else (
+            style.styled(f"  holes: {len(item.holes)} of {len(item.buckets)} cells (the dots)", "red")
+            if item.holes else None)
         if holes is not None:
             console.print(holes)
         console.print()

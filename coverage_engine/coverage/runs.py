@@ -24,6 +24,8 @@ class RunInput:
     ``schema_key`` may name the item declarations (``items``) shared by many runs, so the merge
     matches them to its items once instead of once per run (the store keeps declarations that way).
     ``single`` may replace ``samples`` when every item has exactly one sample: one value per item.
+    ``parameters`` may replace ``assignment``: the parameter names (a tuple shared by many runs) and
+    ``values`` their values in that order (the store keeps assignments that way).
     """
 
     name: str
@@ -37,6 +39,8 @@ class RunInput:
     ignored: Sequence[int] = ()
     schema_key: Hashable | None = None
     single: Sequence | None = None
+    parameters: tuple[str, ...] | None = None
+    values: Sequence | None = None
 
 
 @dataclass

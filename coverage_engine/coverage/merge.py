@@ -27,7 +27,7 @@ from coverage_engine.coverage.buckets import (
     InputValueBuckets,
     bucketing_for,
 )
-from coverage_engine.coverage.run_file import ItemDecl
+from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.coverage.runs import RunInput
 
 #: Index of a verdict in a key's counters ``[hits, passed, failed, errored]``.

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from coverage_engine.coverage.run_file import ItemDecl
+from coverage_engine.coverage.run_records import ItemDecl
 
 #: Verdicts of a run in a report: the run file's four, plus ``pending`` (queued or running, not finished).
 REPORT_VERDICTS = ("passed", "failed", "error", "skipped", "pending")

@@ -139,6 +139,12 @@ class CoverageRecords:
         ensure_schema(engine, QUEUE_TABLES + COVERAGE_TABLES)
         return cls(engine)
 
+    @classmethod
+    def attach(cls, engine: Engine) -> CoverageRecords:
+        """Use an engine another part of the store already opened (the batch runner's), creating the tables."""
+        ensure_schema(engine, QUEUE_TABLES + COVERAGE_TABLES)
+        return cls(engine)
+
     def close(self) -> None:
         self.engine.dispose()
 

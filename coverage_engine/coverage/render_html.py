@@ -20,7 +20,8 @@ from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageRe
 MAX_CHIPS = 6
 MAX_NAMES_IN_DETAILS = 200
 MAX_GRID_SIDE = 60
-MAX_BUCKET_ROWS = 400
+MAX_BUCKET_ROWS = 60          # more buckets are drawn as one histogram instead of a row each
+MAX_FAILING_SHOWN = 50        # failing runs listed open; up to MAX_FAILING_ROWS more behind a click
 MAX_FAILING_ROWS = 1000
 MAX_HOLES = 200
 
@@ -43,7 +44,9 @@ def _grade_colour(grade: float | None) -> str:
 
 
 def _rate_hue(rate: float) -> float:
-    return 125 * rate / 100 if rate < 100 else 125
+    """Red (0 %) through orange and yellow to green (100 %); cubic, so that 85 % already looks amber-green
+    rather than fine: failures are what a reader must notice."""
+    return 125 * (min(max(rate, 0.0), 100.0) / 100) ** 3
 
 
 def _short(name: str) -> str:
@@ -225,6 +228,32 @@ class _Page:
                 'error)</th><th class="num">hits</th><th class="num">pass rate</th><th>failing runs (rerun)</th>'
                 '</tr></thead><tbody>' + "".join(rows) + "</tbody></table>")
 
+    def histogram(self, item: ItemResult) -> str:
+        """Many buckets: one bar each (height = hits, colour = pass rate), holes as red ticks on the axis."""
+        width, height = 1000, 120
+        count = len(item.buckets)
+        step = width / count
+        peak = max((b.hits for b in item.buckets), default=0) or 1
+        bars = []
+        for i, bucket in enumerate(item.buckets):
+            x = i * step
+            tip = escape(f"{bucket.label}: {bucket.hits} hit(s), pass rate {_pct(bucket.pass_rate, 0)}")
+            if bucket.hits == 0 or not bucket.covered:
+                bars.append(f'<rect x="{x:.2f}" y="{height - 4}" width="{max(step, 1):.2f}" height="4" '
+                            f'fill="#d64545"><title>{tip}</title></rect>')
+                continue
+            bar = max(2.0, (height - 8) * bucket.hits / peak)
+            rate = bucket.pass_rate
+            colour = "#4a7fd4" if rate is None else f"hsl({_rate_hue(rate):.0f},62%,44%)"
+            bars.append(f'<rect x="{x:.2f}" y="{height - 6 - bar:.2f}" width="{max(step - 0.3, 0.7):.2f}" '
+                        f'height="{bar:.2f}" fill="{colour}"><title>{tip}</title></rect>')
+        first, last = escape(item.buckets[0].label), escape(item.buckets[-1].label)
+        return (f'<svg class="histogram" viewBox="0 0 {width} {height}" width="100%" height="{height}" '
+                f'preserveAspectRatio="none" role="img" aria-label="hits per bucket">{"".join(bars)}</svg>'
+                f'<div class="heatlegend"><span>{count} buckets, {first} … {last}; bar height: hits, colour: pass '
+                'rate</span><span>0%</span><span class="scale"></span><span>100% pass</span>'
+                '<span class="holekey"></span><span>hole (red tick)</span></div>')
+
     def heat_map(self, item: ItemResult) -> str | None:
         grid = item.cross
         if grid is None or len(grid.labels) != 2:
@@ -279,7 +308,7 @@ class _Page:
         notes = "".join(f'<div class="callout">{escape(n)}</div>' for n in item.notes)
         body = self.heat_map(item)
         if body is None and item.buckets:
-            body = self.bucket_rows(item)
+            body = self.bucket_rows(item) if len(item.buckets) <= MAX_BUCKET_ROWS else self.histogram(item)
         return (f'<article class="item" id="item-{index}"><header><h3>{escape(item.name)}</h3>'
                 f'<span class="kind">{KIND_TITLES[item.kind]}</span>{grade}</header>'
                 f'<div class="facts">{self.facts(item)}</div>{text}{notes}{body or ""}'
@@ -341,22 +370,31 @@ class _Page:
         failing = runs.failing()
         if not failing:
             return ""
-        rows = []
-        for i in failing[:MAX_FAILING_ROWS]:
-            folder, log = self.href(runs.folders[i]), self.href(runs.logs[i])
-            links = " · ".join(x for x in (f'<a href="{folder}">folder</a>' if folder else "",
-                                           f'<a href="{log}">log</a>' if log else "") if x)
-            reason = escape((runs.reasons[i] or "").strip().splitlines()[0] if runs.reasons[i] else "")
-            rows.append(f'<tr><td class="mono">{escape(runs.names[i])}</td>'
-                        f'<td><span class="verdict {runs.verdicts[i]}">{runs.verdicts[i]}</span></td>'
-                        f'<td class="reason" title="{reason}">{reason}</td><td>{links}</td></tr>')
-        more = len(failing) - MAX_FAILING_ROWS
-        if more > 0:
-            rows.append(f'<tr><td colspan="4" class="muted">… {more} more in the JSON report</td></tr>')
+
+        def rows(ids: list[int]) -> str:
+            out = []
+            for i in ids:
+                folder, log = self.href(runs.folders[i]), self.href(runs.logs[i])
+                links = " · ".join(x for x in (f'<a href="{folder}">folder</a>' if folder else "",
+                                               f'<a href="{log}">log</a>' if log else "") if x)
+                reason = escape((runs.reasons[i] or "").strip().splitlines()[0] if runs.reasons[i] else "")
+                out.append(f'<tr><td class="mono">{escape(runs.names[i])}</td>'
+                           f'<td><span class="verdict {runs.verdicts[i]}">{runs.verdicts[i]}</span></td>'
+                           f'<td class="reason" title="{reason}">{reason}</td><td>{links}</td></tr>')
+            return "".join(out)
+
+        head = ('<table class="overview runs"><thead><tr><th>run</th><th>verdict</th><th>reason</th><th>files</th>'
+                '</tr></thead><tbody>')
+        shown, rest = failing[:MAX_FAILING_SHOWN], failing[MAX_FAILING_SHOWN:MAX_FAILING_ROWS]
+        more = ""
+        if rest:
+            left = len(failing) - MAX_FAILING_SHOWN - len(rest)
+            tail = f'<p class="muted">… {left} more in the JSON report</p>' if left > 0 else ""
+            more = (f'<details class="more"><summary>{len(failing) - MAX_FAILING_SHOWN} more failing run(s)</summary>'
+                    f'{head}{rows(rest)}</tbody></table>{tail}</details>')
         return (f'<section class="group" id="failing"><h2>Failing runs ({len(failing)})</h2><p class="lead">'
                 'Each links to its folder and log; the variant name is what to rerun.</p>'
-                '<table class="overview runs"><thead><tr><th>run</th><th>verdict</th><th>reason</th><th>files</th>'
-                '</tr></thead><tbody>' + "".join(rows) + "</tbody></table></section>")
+                f'{head}{rows(shown)}</tbody></table>{more}</section>')
 
     # ------------------------------------------------------------------ the page
     def page(self, generated: str) -> str:

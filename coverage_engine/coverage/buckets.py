@@ -107,9 +107,13 @@ class RangeBuckets:
         span = (int(high) - int(low) + 1) if self.integer else (high - low)
         self._aligned = span == self.count * self.every
 
-    def key(self, value: float) -> int | None:
-        if value < self.low or value > self.high:
+    def key(self, value: object) -> int | None:
+        if not isinstance(value, (int, float)) or value < self.low or value > self.high:
             return None
+        return self.index(value)
+
+    def index(self, value: float) -> int:
+        """The bucket of a value known to lie in the range."""
         index = int((value - self.low) // self.every)
         return index if index < self.count else self.count - 1
 
@@ -159,11 +163,16 @@ class MemberBuckets:
         return [Bucket(value_label(m), value=m) for m in self.members], dict(self._index)
 
 
-def _sort_values(keys: list[Hashable]) -> list[Hashable]:
+def _numbers(keys: Sequence[Hashable]) -> list[int | float] | None:
+    """The keys ascending when every one is a number (not a bool), else None."""
+    numbers = [k for k in keys if isinstance(k, (int, float)) and not isinstance(k, bool)]
+    return sorted(numbers) if numbers and len(numbers) == len(keys) else None
+
+
+def _sort_values(keys: list[Hashable]) -> Sequence[Hashable]:
     """Numbers ascending when every value is a number; otherwise the order they were first seen."""
-    if keys and all(isinstance(k, (int, float)) and not isinstance(k, bool) for k in keys):
-        return sorted(keys)  # type: ignore[type-var]
-    return keys
+    numbers = _numbers(keys)
+    return keys if numbers is None else numbers
 
 
 class DistinctBuckets:
@@ -190,13 +199,18 @@ class InputValueBuckets(DistinctBuckets):
     limit = 100_000
 
     def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
-        ordered = _sort_values(list(keys))
-        numeric = ordered and all(isinstance(k, (int, float)) and not isinstance(k, bool) for k in ordered)
-        if not numeric or len(ordered) <= INPUT_VALUES_LIMIT:
-            return super().finish(ordered)
-        low, high = float(ordered[0]), float(ordered[-1])  # type: ignore[arg-type]
+        seen = list(keys)
+        numbers = _numbers(seen)
+        if numbers is None or len(numbers) <= INPUT_VALUES_LIMIT:
+            return super().finish(seen)
+        low, high = float(numbers[0]), float(numbers[-1])
         ranges = RangeBuckets("float", low, high, (high - low) / AUTO_BINS)
-        return ranges.buckets(), {k: ranges.key(float(k)) for k in ordered}  # type: ignore[arg-type]
+        index: dict[Hashable, int] = {k: ranges.index(k) for k in numbers}
+        return ranges.buckets(), index
+
+
+#: What a cross is made of: any bucketing but another cross.
+ComponentBucketing = RangeBuckets | MemberBuckets | DistinctBuckets
 
 
 class CrossBuckets:
@@ -204,7 +218,7 @@ class CrossBuckets:
 
     kind = "cross"
 
-    def __init__(self, components: Sequence[Bucketing]) -> None:
+    def __init__(self, components: Sequence[ComponentBucketing]) -> None:
         self.components = tuple(components)
 
     def key(self, values: Sequence[object]) -> tuple | None:
@@ -225,11 +239,11 @@ class CrossBuckets:
         return list(zip(*columns, strict=True)) if columns else []
 
 
-Bucketing = RangeBuckets | MemberBuckets | DistinctBuckets | CrossBuckets
+Bucketing = ComponentBucketing | CrossBuckets
 
 
 def bucketing_for(value_type: ValueType, value_range: tuple[float, float] | None,
-                  every: float | None) -> RangeBuckets | MemberBuckets | DistinctBuckets:
+                  every: float | None) -> ComponentBucketing:
     """The bucketing of a (non-cross) cover item."""
     if value_type.kind == "enum":
         return MemberBuckets(value_type.members)

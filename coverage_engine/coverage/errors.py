@@ -8,7 +8,7 @@ file's text), a key of the plan file, or just the file or folder. ``cli/`` rende
 from __future__ import annotations
 
 from coverage_engine.errors import OscError
-from coverage_engine.parse.syntax import Location
+from coverage_engine.location import Location
 
 
 def location(file: str, line: int = 0, column: int = 0) -> Location:

@@ -22,6 +22,7 @@ from coverage_engine.coverage.model import (
     BucketResult,
     CoverageReport,
     CrossGrid,
+    Extremes,
     ItemResult,
     RecordSummary,
     RunTable,
@@ -87,11 +88,17 @@ def _component_axis(component: ItemCounts, extra_keys: set) -> tuple[list[str], 
     return [d.label for d in defs], index
 
 
+def _parts(key: Hashable) -> tuple[Hashable, ...]:
+    """The components' keys in the key of a cross's bucket (a tuple: see ``CrossBuckets.key``)."""
+    assert isinstance(key, tuple), key
+    return key
+
+
 def _cross_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[list[BucketResult], CrossGrid | None, list[str]]:
     axes = counts.components
     extra: list[set] = [set() for _ in axes]
     for key in counts.stats:
-        for position, part in enumerate(key):
+        for position, part in enumerate(_parts(key)):
             extra[position].add(part)
     labels, indexes = [], []
     for component, keys in zip(axes, extra, strict=True):
@@ -106,7 +113,7 @@ def _cross_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[lis
     failing: list[list[int]] = [[] for _ in range(cells)]
     for key, st in counts.stats.items():
         flat = 0
-        for position, part in enumerate(key):
+        for position, part in enumerate(_parts(key)):
             flat = flat * len(labels[position]) + indexes[position][part]
         row = sums[flat]
         for s in range(4):
@@ -129,9 +136,9 @@ def _record(counts: ItemCounts) -> RecordSummary:
     if len(values):
         low = min(range(len(values)), key=values.__getitem__)
         high = max(range(len(values)), key=values.__getitem__)
-        return RecordSummary(count=len(values), minimum=values[low], min_run=counts.value_runs[low],
-                             median=statistics.median(values), maximum=values[high],
-                             max_run=counts.value_runs[high])
+        extremes = Extremes(minimum=values[low], min_run=counts.value_runs[low], median=statistics.median(values),
+                            maximum=values[high], max_run=counts.value_runs[high])
+        return RecordSummary(count=len(values), extremes=extremes)
     top = tuple((str(v), n) for v, n in counts.others.most_common(TOP_VALUES))
     return RecordSummary(count=sum(counts.others.values()), top_values=top)
 
@@ -174,10 +181,11 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
 
 def overall_grade(items: list[ItemResult]) -> float | None:
     """The weighted mean of the graded items' grades (None when no item has weight)."""
-    total = sum(item.weight for item in items if item.graded)
+    graded = [(item.grade, item.weight) for item in items if item.grade is not None]
+    total = sum(weight for _, weight in graded)
     if total <= 0:
         return None
-    return sum(item.grade * item.weight for item in items if item.graded) / total  # type: ignore[operator]
+    return sum(grade * weight for grade, weight in graded) / total
 
 
 def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: str = "", complete: bool = True,
@@ -209,7 +217,7 @@ def build_report(source: RunSource, plan: CoveragePlan | None = None) -> Coverag
     collecting = gc.isenabled()
     gc.disable()   # the merge makes many small containers and no cycles: generational passes only cost time
     try:
-        runs = iter(source.runs)  # type: ignore[call-overload]
+        runs = iter(source.runs)
         while chunk := list(islice(runs, CHUNK_RUNS)):
             merger.add_chunk(chunk)
     finally:

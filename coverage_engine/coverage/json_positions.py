@@ -22,7 +22,7 @@ def _skip(text: str, pos: int) -> int:
 def _step_object(text: str, pos: int, key: str) -> int | None:
     pos = _skip(text, pos + 1)
     while pos < len(text) and text[pos] == '"':
-        name, pos = json.decoder.scanstring(text, pos + 1)
+        name, pos = _DECODER.raw_decode(text, pos)   # the key, a JSON string
         pos = _skip(text, pos)
         if pos >= len(text) or text[pos] != ":":
             return None

@@ -218,7 +218,7 @@ class CoverageMerger:
             plan = self._inputs.get(keys) or self._input_plan(keys)
             if listed:
                 rows = [runs[i].values for i in members]
-                if any(len(row) != len(keys) for row in rows):   # type: ignore[arg-type]
+                if any(row is None or len(row) != len(keys) for row in rows):
                     self._malformed += len(rows)
                     continue
             else:
@@ -244,7 +244,7 @@ class CoverageMerger:
                      rids: list[int]) -> None:
         width = len(targets)
         single = group[0].single is not None       # a group is all one encoding (see add_chunk)
-        good = [k for k, run in enumerate(group) if len(run.single if single else run.samples) == width]  # type: ignore[arg-type]
+        good = [k for k, run in enumerate(group) if len((run.single or ()) if single else run.samples) == width]
         if len(good) != len(group):
             self._malformed += len(group) - len(good)
             group, rids = [group[k] for k in good], [rids[k] for k in good]
@@ -252,7 +252,7 @@ class CoverageMerger:
             return
         failing = slot == 2 or slot == 3
         if single:
-            columns = list(zip(*(run.single for run in group), strict=True))  # type: ignore[misc]
+            columns = list(zip(*(run.single for run in group), strict=True))
         else:
             columns = list(zip(*(run.samples for run in group), strict=True))
         ignored = [run.ignored for run in group if run.ignored and any(run.ignored)]

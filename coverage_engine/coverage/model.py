@@ -63,15 +63,22 @@ class CrossGrid:
 
 
 @dataclass(frozen=True)
+class Extremes:
+    """Min / median / max of a record item's numbers, and the run (index) of each extreme."""
+
+    minimum: float
+    min_run: int
+    median: float
+    maximum: float
+    max_run: int
+
+
+@dataclass(frozen=True)
 class RecordSummary:
-    """A record item's values: count, min / median / max, and the run of each extreme."""
+    """A record item's values: count, and its extremes when they are numbers, else its commonest values."""
 
     count: int
-    minimum: float | None = None
-    min_run: int | None = None
-    median: float | None = None
-    maximum: float | None = None
-    max_run: int | None = None
+    extremes: Extremes | None = None
     top_values: tuple[tuple[str, int], ...] = ()   # for records that are not numbers
 
 

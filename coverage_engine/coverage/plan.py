@@ -100,9 +100,9 @@ def _scalar(file: str, node: yaml.Node, text: str) -> object:
 
 def _weight(file: str, node: yaml.Node, text: str) -> float:
     value = _scalar(file, node, text)
-    if type(value) not in (int, float) or not math.isfinite(value) or value < 0:
-        raise _error(file, node, f"weight must be a number, 0 or more (got {node.value!r})", text)
-    return float(value)
+    if (type(value) is int or type(value) is float) and math.isfinite(value) and value >= 0:
+        return float(value)
+    raise _error(file, node, f"weight must be a number, 0 or more (got {node.value!r})", text)
 
 
 def _at_least(file: str, node: yaml.Node, text: str) -> int:

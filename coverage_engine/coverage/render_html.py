@@ -347,16 +347,17 @@ class _Page:
             unit = f" {escape(item.unit)}" if item.unit else ""
             name = f'<b id="item-{index}">{escape(item.name)}</b>' + (
                 f'<div class="muted">{escape(item.text)}</div>' if item.text else "")
-            if rec.minimum is None:
+            ext = rec.extremes
+            if ext is None:
                 top = ", ".join(f"{escape(v)} ({n})" for v, n in rec.top_values) or "no sample"
                 rows.append(f'<tr><td>{name}</td><td class="num">{rec.count}</td><td colspan="4">{top}</td></tr>')
                 continue
             rows.append(
                 f'<tr><td>{name}</td><td class="num">{rec.count}</td>'
-                f'<td class="num">{rec.minimum:g}{unit}<div>{self.run_link(rec.min_run)}</div></td>'  # type: ignore[arg-type]
-                f'<td class="strip">{self.strip(rec.minimum, rec.median, rec.maximum)}</td>'  # type: ignore[arg-type]
-                f'<td class="num">{rec.median:g}{unit}</td>'
-                f'<td class="num">{rec.maximum:g}{unit}<div>{self.run_link(rec.max_run)}</div></td></tr>')  # type: ignore[arg-type]
+                f'<td class="num">{ext.minimum:g}{unit}<div>{self.run_link(ext.min_run)}</div></td>'
+                f'<td class="strip">{self.strip(ext.minimum, ext.median, ext.maximum)}</td>'
+                f'<td class="num">{ext.median:g}{unit}</td>'
+                f'<td class="num">{ext.maximum:g}{unit}<div>{self.run_link(ext.max_run)}</div></td></tr>')
         if not rows:
             return ""
         return ('<section class="group"><h2>Record items</h2><p class="lead">Raw values recorded by record() '

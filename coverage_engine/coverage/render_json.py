@@ -39,12 +39,12 @@ def _item(item: ItemResult, names: tuple[str, ...]) -> dict[str, Any]:
     if item.cross is not None:
         out["cross"] = {"axes": list(item.cross.axes), "labels": [list(axis) for axis in item.cross.labels]}
     if item.record is not None:
-        rec = item.record
+        rec, ext = item.record, item.record.extremes
         out["record"] = {
             "count": rec.count,
-            "min": None if rec.minimum is None else {"value": rec.minimum, "run": names[rec.min_run]},
-            "median": rec.median,
-            "max": None if rec.maximum is None else {"value": rec.maximum, "run": names[rec.max_run]},
+            "min": None if ext is None else {"value": ext.minimum, "run": names[ext.min_run]},
+            "median": None if ext is None else ext.median,
+            "max": None if ext is None else {"value": ext.maximum, "run": names[ext.max_run]},
             "top_values": [[value, count] for value, count in rec.top_values],
         }
     return out

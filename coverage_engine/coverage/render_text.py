@@ -7,7 +7,7 @@ out; ``json`` and ``html`` have everything.
 from __future__ import annotations
 
 from rich import box
-from rich.console import Console, Group
+from rich.console import Console, Group, JustifyMethod
 from rich.table import Table
 from rich.text import Text
 
@@ -20,6 +20,15 @@ MAX_NAMES = 5
 MAX_HOLES = 20
 MAX_FAILING_RUNS = 50
 BAR_WIDTH = 20
+
+#: The columns of the tables, with how each is aligned.
+Columns = tuple[tuple[str, JustifyMethod], ...]
+_OVERVIEW_COLUMNS: Columns = (("item", "left"), ("kind", "left"), ("buckets", "right"), ("holes", "right"),
+                              ("weight", "right"), ("grade", "right"), ("", "left"))
+_BUCKET_COLUMNS: Columns = (("bucket", "left"), ("hits", "right"), ("runs", "right"), ("pass rate", "right"),
+                            ("", "left"), ("failing runs (rerun)", "left"))
+_RECORD_COLUMNS: Columns = (("item", "left"), ("unit", "left"), ("samples", "right"), ("min", "right"),
+                            ("min run", "left"), ("median", "right"), ("max", "right"), ("max run", "left"))
 
 
 def percent(value: float | None) -> str:
@@ -35,8 +44,8 @@ class _Style:
     def bar(self, fraction: float, width: int = BAR_WIDTH, colour: str = "green") -> Text:
         fraction = min(max(fraction, 0.0), 1.0)
         filled = round(fraction * width)
-        text = Text(self.full * filled, style=None if self.plain else colour)
-        text.append(self.empty * (width - filled), style=None if self.plain else "grey37")
+        text = Text(self.full * filled, style="" if self.plain else colour)
+        text.append(self.empty * (width - filled), style="" if self.plain else "grey37")
         return text
 
     def grade_colour(self, grade: float | None) -> str:
@@ -45,7 +54,7 @@ class _Style:
         return "green" if grade >= 90 else "yellow" if grade >= 60 else "red"
 
     def styled(self, text: str, style: str) -> Text:
-        return Text(text, style=None if self.plain else style)
+        return Text(text, style="" if self.plain else style)
 
 
 def _names(bucket: BucketResult, names: tuple[str, ...]) -> str:
@@ -83,9 +92,8 @@ def _summary(report: CoverageReport, style: _Style) -> list:
 
 def _overview(report: CoverageReport, style: _Style) -> Table:
     table = Table(title="Items", box=style.box, title_justify="left", expand=False)
-    for column, justify in (("item", "left"), ("kind", "left"), ("buckets", "right"), ("holes", "right"),
-                            ("weight", "right"), ("grade", "right"), ("", "left")):
-        table.add_column(column, justify=justify, no_wrap=column == "item")  # type: ignore[arg-type]
+    for column, justify in _OVERVIEW_COLUMNS:
+        table.add_column(column, justify=justify, no_wrap=column == "item")
     for item in report.items:
         if not item.graded:
             continue
@@ -130,9 +138,8 @@ def _title(item: ItemResult, style: _Style) -> Text:
 
 def _bucket_table(item: ItemResult, names: tuple[str, ...], style: _Style) -> Table:
     table = Table(box=style.box, expand=False)
-    for column, justify in (("bucket", "left"), ("hits", "right"), ("runs", "right"), ("pass rate", "right"),
-                            ("", "left"), ("failing runs (rerun)", "left")):
-        table.add_column(column, justify=justify)  # type: ignore[arg-type]
+    for column, justify in _BUCKET_COLUMNS:
+        table.add_column(column, justify=justify)
     peak = max((b.hits for b in item.buckets), default=0) or 1
     for bucket in item.buckets[:MAX_BUCKET_ROWS]:
         if bucket.covered:
@@ -148,7 +155,8 @@ def _bucket_table(item: ItemResult, names: tuple[str, ...], style: _Style) -> Ta
     return table
 
 
-def _grid(item: ItemResult, style: _Style) -> Table | None:
+def _grid(item: ItemResult, style: _Style) -> tuple[Text, Table] | None:
+    """A two-way cross as a table of cells, with a caption naming its axes (None when it is not drawn)."""
     grid = item.cross
     if grid is None or len(grid.labels) != 2:
         return None
@@ -171,7 +179,9 @@ def _grid(item: ItemResult, style: _Style) -> Table | None:
             colour = "green" if rate is None or rate >= 99.5 else "yellow" if rate >= 50 else "red"
             cells.append(style.styled(text, colour if bucket.covered else "red"))
         table.add_row(*cells)
-    return table
+    caption = style.styled(f"  rows: {grid.axes[0]}, columns: {grid.axes[1]}; cells: hits (pass rate), '.' a hole",
+                           "grey50")
+    return caption, table
 
 
 def _short(name: str) -> str:
@@ -194,18 +204,18 @@ def _records(report: CoverageReport, style: _Style) -> Table | None:
         return None
     names = report.runs.names
     table = Table(title="Record items", box=style.box, title_justify="left")
-    for column, justify in (("item", "left"), ("unit", "left"), ("samples", "right"), ("min", "right"),
-                            ("min run", "left"), ("median", "right"), ("max", "right"), ("max run", "left")):
-        table.add_column(column, justify=justify)  # type: ignore[arg-type]
+    for column, justify in _RECORD_COLUMNS:
+        table.add_column(column, justify=justify)
     for item in records:
         rec = item.record
         assert rec is not None
-        if rec.minimum is None:
+        ext = rec.extremes
+        if ext is None:
             top = ", ".join(f"{v} ({n})" for v, n in rec.top_values) or "no sample"
             table.add_row(item.name, item.unit or "", str(rec.count), top, "", "", "", "")
             continue
-        table.add_row(item.name, item.unit or "", str(rec.count), f"{rec.minimum:g}", names[rec.min_run],
-                      f"{rec.median:g}", f"{rec.maximum:g}", names[rec.max_run])
+        table.add_row(item.name, item.unit or "", str(rec.count), f"{ext.minimum:g}", names[ext.min_run],
+                      f"{ext.median:g}", f"{ext.maximum:g}", names[ext.max_run])
     return table
 
 
@@ -242,9 +252,9 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
             console.print(style.styled(f"  note: {note}", "yellow"))
         grid = _grid(item, style)
         if grid is not None:
-            console.print(style.styled(f"  rows: {item.cross.axes[0]}, columns: {item.cross.axes[1]}; "  # type: ignore[union-attr]
-                                       f"cells: hits (pass rate), '.' a hole", "grey50"))
-            console.print(grid)
+            caption, cells = grid
+            console.print(caption)
+            console.print(cells)
         elif item.buckets:
             console.print(_bucket_table(item, names, style))
         holes = _holes(item, style) if grid is None else (
@@ -255,5 +265,5 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
         console.print()
     for table in (_records(report, style), _failing(report, style)):
         if table is not None:
-            console.print(table)
+            console.print(cells)
             console.print()

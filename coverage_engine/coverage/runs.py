@@ -8,7 +8,7 @@ assignment.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Mapping, Sequence
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.run_records import ItemDecl
@@ -48,7 +48,7 @@ class RunSource:
     """A stream of runs and what is known about the set: where from, whether it is complete, notes."""
 
     label: str
-    runs: object  # an iterable of RunInput, consumed once
+    runs: Iterable[RunInput]  # consumed once
     complete: bool = True
     notes: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)

@@ -33,7 +33,7 @@ class ValueType:
         """Whether ``value`` (as decoded from JSON) is a valid sample of this type."""
         kind = self.kind
         if kind == "float":
-            return type(value) in (float, int) and math.isfinite(value)
+            return (type(value) is float or type(value) is int) and math.isfinite(value)
         if kind == "int":
             return type(value) is int
         if kind == "bool":

@@ -72,23 +72,29 @@ class _StoreRuns:
             self.pending += 1
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
         if row.body is not None and row.schema_id is not None:
-            known = self.declarations
-            decls, parameters = known[row.schema_id] if row.schema_id in known else self._schema(row.schema_id)
-            values, one, samples, ignored = _decode(row.body)[0]
-            log = folder and f"{folder}/log.txt"
-            if not parameters and row.variant_assignment:
-                assignment = self._variant(row.variant_assignment)
-                parameters = values = None
-            else:
-                assignment = {}
-            if decls is None:
-                return RunInput(row.name, verdict, row.reason, folder, log, assignment,
-                                parameters=parameters or None, values=values)
-            return RunInput(row.name, verdict, row.reason, folder, log, assignment, decls, samples or (),
-                            ignored or (), row.schema_id, one, parameters or None, values)
+            return self._recorded_run(row, verdict, folder, row.schema_id, row.body)
+        return self._folder_run(row, verdict, folder)
+
+    def _recorded_run(self, row: StoredRun, verdict: str, folder: str | None, schema_id: int, body: str) -> RunInput:
+        """A job whose coverage the store holds: its body decoded against the shared declarations."""
+        known = self.declarations
+        decls, parameters = known[schema_id] if schema_id in known else self._schema(schema_id)
+        values, one, samples, ignored = _decode(body)[0]
+        log = folder and f"{folder}/log.txt"
+        names = parameters or None
+        assignment: dict[str, object] = {}
+        if names is None and row.variant_assignment:   # the run named no parameters: its variant's record
+            assignment, values = self._variant(row.variant_assignment), None
+        if decls is None:
+            return RunInput(row.name, verdict, row.reason, folder, log, assignment, parameters=names, values=values)
+        return RunInput(row.name, verdict, row.reason, folder, log, assignment, decls, samples or (),
+                        ignored or (), schema_id, one, names, values)
+
+    def _folder_run(self, row: StoredRun, verdict: str, folder: str | None) -> RunInput:
+        """A job without coverage in the store: its ``coverage.json`` when its folder is on this host."""
         run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder,
                        log=os.path.join(folder, "log.txt") if folder else None)
-        assignment: dict = {}
+        assignment: dict[str, object] = {}
         if folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
             try:
                 coverage = read_run_coverage(os.path.join(folder, RUN_FILE))
@@ -104,7 +110,7 @@ class _StoreRuns:
         return run
 
     @staticmethod
-    def _variant(text: str) -> dict:
+    def _variant(text: str) -> dict[str, object]:
         """A ``variants.assignment`` JSON text as a dict ({} when it is not one)."""
         try:
             value = json.loads(text)
@@ -129,13 +135,17 @@ class _StoreRuns:
 
 def store_source(url: str | None, results: str | None = None, batch_id: int | None = None) -> RunSource:
     """The runs of a batch in the store at ``url``: ``batch_id``, else the latest batch whose output folder
-    is ``results``, else the latest batch."""
-    queue = QueueStore.open(url)
+    is ``results``, else the latest batch.
+
+    Reading changes nothing: a store that is not there is :class:`~store.database.StoreMissing` (no file
+    is created) and an older store is read as it is, never upgraded.
+    """
+    queue = QueueStore.open_existing(url)
     try:
         batch = _pick_batch(queue, results, batch_id)
     finally:
         queue.close()
-    records = CoverageRecords.open(url)
+    records = CoverageRecords.open_existing(url)
     source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
     source.runs = iter(_StoreRuns(records, batch.id, source))
     return source

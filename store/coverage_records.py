@@ -45,8 +45,9 @@ from sqlalchemy import (
     select,
 )
 from sqlalchemy.exc import IntegrityError, SQLAlchemyError
+from sqlalchemy.sql.expression import ColumnElement, FromClause
 
-from store.database import StoreError, ensure_schema, metadata, open_engine
+from store.database import StoreError, ensure_schema, metadata, open_engine, open_existing
 from store.queue_tables import QUEUE_TABLES, jobs
 from store.variants import variants
 
@@ -140,6 +141,15 @@ class CoverageRecords:
         return cls(engine)
 
     @classmethod
+    def open_existing(cls, url: str | None = None) -> CoverageRecords:
+        """Open a store that must exist already, for reading: nothing is created or migrated.
+
+        :class:`~store.database.StoreMissing` when there is none; a store from before per-job coverage
+        (schema version 1) reads as one whose jobs recorded no coverage.
+        """
+        return cls(open_existing(url))
+
+    @classmethod
     def attach(cls, engine: Engine) -> CoverageRecords:
         """Use an engine another part of the store already opened (the batch runner's), creating the tables."""
         ensure_schema(engine, QUEUE_TABLES + COVERAGE_TABLES)
@@ -229,18 +239,34 @@ class CoverageRecords:
         return join_document(declarations, json.loads(row[1]), json.loads(row[2]), format_name, format_version)
 
     def iter_batch(self, batch_id: int, chunk: int = 5000) -> Iterator[StoredRun]:
-        """Every job of a batch in file order, with its coverage row when there is one, read in chunks."""
-        has_variants = inspect(self.engine).has_table(variants.name)
-        assignment = (select(variants.c.assignment).where(variants.c.file_path == jobs.c.scenario_path)
-                      .order_by(variants.c.id.desc()).limit(1).scalar_subquery()) if has_variants else None
-        columns = [jobs.c.seq, jobs.c.name, jobs.c.status, jobs.c.reason, jobs.c.output_dir, jobs.c.scenario_path,
-                   job_coverage.c.schema_id, job_coverage.c.body]
-        columns.append(assignment.label("variant_assignment") if assignment is not None
-                       else null().label("variant_assignment"))
+        """Every job of a batch in file order, with its coverage row when there is one, read in chunks.
+
+        A table the store does not have (no variation records; a store from before per-job coverage)
+        reads as empty: reading never creates one.
+        """
+        try:
+            tables = inspect(self.engine)
+            has_variants, has_coverage = tables.has_table(variants.name), tables.has_table(job_coverage.name)
+        except SQLAlchemyError as exc:
+            raise StoreError(f"cannot read the coverage of batch {batch_id} from {self.url}: {exc}") from exc
+        columns: list[ColumnElement[Any]] = [jobs.c.seq, jobs.c.name, jobs.c.status, jobs.c.reason,
+                                             jobs.c.output_dir, jobs.c.scenario_path]
+        source: FromClause = jobs
+        if has_coverage:
+            columns += [job_coverage.c.schema_id, job_coverage.c.body]
+            source = jobs.outerjoin(job_coverage, job_coverage.c.job_id == jobs.c.id)
+        else:
+            columns += [null().label("schema_id"), null().label("body")]
+        if has_variants:
+            assignment = (select(variants.c.assignment).where(variants.c.file_path == jobs.c.scenario_path)
+                          .order_by(variants.c.id.desc()).limit(1).scalar_subquery())
+            columns.append(assignment.label("variant_assignment"))
+        else:
+            columns.append(null().label("variant_assignment"))
         last = -1
         try:
             while True:
-                stmt = (select(*columns).select_from(jobs.outerjoin(job_coverage, job_coverage.c.job_id == jobs.c.id))
+                stmt = (select(*columns).select_from(source)
                         .where(jobs.c.batch_id == batch_id, jobs.c.seq > last).order_by(jobs.c.seq).limit(chunk))
                 with self.engine.connect() as conn:
                     rows = conn.execute(stmt).all()

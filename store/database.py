@@ -6,11 +6,25 @@ so one ``create_all`` makes a complete store and one version row says which rele
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
-from sqlalchemy import Column, Engine, Integer, MetaData, String, Table, create_engine, event, select, text
-from sqlalchemy.exc import SQLAlchemyError
+from sqlalchemy import (
+    Column,
+    Engine,
+    Integer,
+    MetaData,
+    String,
+    Table,
+    create_engine,
+    event,
+    inspect,
+    select,
+    text,
+)
+from sqlalchemy.engine import make_url
+from sqlalchemy.exc import ArgumentError, SQLAlchemyError
 
 #: Shared metadata: table modules register their tables here.
 metadata = MetaData()
@@ -36,6 +50,10 @@ store_meta = Table(
 
 class StoreError(Exception):
     """The store cannot be used (bad URL, unreachable server, incompatible schema)."""
+
+
+class StoreMissing(StoreError):
+    """There is no store at the given place (a command that only reads never creates one)."""
 
 
 def store_url(option: str | None = None) -> str:
@@ -82,6 +100,81 @@ def open_engine(url: str | None = None) -> Engine:
             engine = create_engine(url, pool_pre_ping=True)
     except (SQLAlchemyError, ImportError, ValueError) as exc:
         raise StoreError(f"cannot open store {url!r}: {exc}") from exc
+    return engine
+
+
+def sqlite_file(url: str) -> str | None:
+    """The database file of a SQLite URL (None for other engines, in-memory databases and bad URLs)."""
+    try:
+        parsed = make_url(url)
+    except ArgumentError:   # reported when the URL is opened
+        return None
+    if not parsed.drivername.startswith("sqlite") or parsed.database in (None, "", ":memory:"):
+        return None
+    return parsed.database
+
+
+def _check_sqlite_store(path: Path) -> None:
+    """Refuse a SQLite path that holds no store, without creating or changing a file.
+
+    Our stores are in WAL mode (header bytes 18-19 are 2): opening one with :func:`open_engine` changes
+    nothing. Any other SQLite file is looked at read-only first, since opening it for writing would
+    switch its journal to WAL.
+    """
+    if not path.is_file():
+        raise StoreMissing(f"there is no store at {path.absolute()} (nothing was created)")
+    try:
+        with open(path, "rb") as handle:
+            header = handle.read(100)
+    except OSError as exc:
+        raise StoreError(f"cannot read the store {path}: {exc.strerror}") from exc
+    if len(header) < 20 or not header.startswith(b"SQLite format 3\x00"):
+        raise StoreMissing(f"{path.absolute()} is not a scenario store (not a SQLite database)")
+    if header[18] == 2 and header[19] == 2:
+        return
+    import sqlite3  # here: only a store that is not ours yet is looked at this way
+
+    try:
+        with contextlib.closing(sqlite3.connect(f"{path.absolute().as_uri()}?mode=ro", uri=True)) as conn:
+            found = conn.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?",
+                                 (store_meta.name,)).fetchone()
+    except sqlite3.Error as exc:
+        raise StoreError(f"cannot read the store {path}: {exc}") from exc
+    if found is None:
+        raise StoreMissing(f"{path.absolute()} is not a scenario store (it has no {store_meta.name} table)")
+
+
+def open_existing(url: str | None = None) -> Engine:
+    """An engine on a store that must exist already, for commands that only read.
+
+    Nothing is created, upgraded or migrated: a SQLite file that is not there, or a database without the
+    store's version table, raises :class:`StoreMissing`. A store of a version this release upgrades
+    (:data:`UPGRADABLE_FROM`: tables were only added since) is read as it is, its version row untouched;
+    the tables it lacks read as empty. Any other version raises :class:`StoreError`.
+    """
+    url = store_url(url)
+    path = sqlite_file(url)
+    if path is not None:
+        _check_sqlite_store(Path(path))
+    engine = open_engine(url)
+    shown = engine.url.render_as_string(hide_password=True)
+    try:
+        with engine.connect() as conn:
+            if not inspect(conn).has_table(store_meta.name):
+                raise StoreMissing(f"{shown} is not a scenario store (it has no {store_meta.name} table)")
+            row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
+    except SQLAlchemyError as exc:
+        engine.dispose()
+        raise StoreError(f"cannot use store {shown}: {exc}") from exc
+    except StoreError:
+        engine.dispose()
+        raise
+    version = None if row is None else row[0]
+    if version != SCHEMA_VERSION and version not in UPGRADABLE_FROM:
+        engine.dispose()
+        readable = ", ".join(str(v) for v in sorted({*UPGRADABLE_FROM, SCHEMA_VERSION}))
+        raise StoreError(f"the store at {shown} has schema version {version if version is not None else 'none'}, "
+                         f"this release reads versions {readable}; use a matching release")
     return engine
 
 

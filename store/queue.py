@@ -17,12 +17,12 @@ from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from sqlalchemy import Connection, Engine, func, insert, select
+from sqlalchemy import Connection, Engine, func, insert, inspect, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 
 from store import queue_statements as sql
 from store import states
-from store.database import StoreError, ensure_schema, open_engine
+from store.database import StoreError, ensure_schema, open_engine, open_existing
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
@@ -54,6 +54,24 @@ class QueueStore(QueueReads):
         """Open the store at ``url`` (``--store``, ``$SCENARIO_STORE`` or the default file) and create tables."""
         engine = open_engine(url)
         ensure_schema(engine, QUEUE_TABLES)
+        return cls(engine)
+
+    @classmethod
+    def open_existing(cls, url: str | None = None) -> QueueStore:
+        """Open a store that must exist already, creating and migrating nothing (for commands that read).
+
+        :class:`~store.database.StoreMissing` when there is no store at ``url``; a store without the
+        queue's tables (only variation records, say) is a :class:`StoreError`: it holds no batch.
+        """
+        engine = open_existing(url)
+        try:
+            has_batches = inspect(engine).has_table(batches.name)
+        except SQLAlchemyError as exc:
+            engine.dispose()
+            raise StoreError(f"cannot use store {engine.url.render_as_string(hide_password=True)}: {exc}") from exc
+        if not has_batches:
+            engine.dispose()
+            raise StoreError(f"the store {engine.url.render_as_string(hide_password=True)} holds no batch")
         return cls(engine)
 
     @property

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from pathlib import Path
 
 import pytest
 
@@ -81,6 +82,36 @@ def test_a_version_1_store_is_upgraded_in_place(tmp_path):
 
     with pytest.raises(StoreError, match="schema version 99"):
         ensure_schema(open_engine(url))
+
+
+def test_reading_opens_only_an_existing_store_and_changes_nothing(store_url):
+    """``open_existing`` (the report's way in): no store is no store; an old one is read, not upgraded."""
+    from sqlalchemy import inspect, text
+
+    from store.database import StoreMissing, sqlite_file
+
+    with pytest.raises(StoreMissing, match="no store|not a scenario store"):
+        CoverageRecords.open_existing(store_url)
+    file = sqlite_file(store_url)
+    assert file is None or not Path(file).exists()             # the failed open created nothing …
+    engine = open_engine(store_url)
+    assert inspect(engine).get_table_names() == []            # … in the PostgreSQL database either
+    queue, batch = _batch(store_url, ["a", "b"])
+    queue.close()
+    with engine.begin() as conn:                               # as a version-1 release left it
+        conn.execute(text("UPDATE store_meta SET schema_version = 1"))
+        conn.execute(text("DROP TABLE IF EXISTS job_coverage"))
+        conn.execute(text("DROP TABLE IF EXISTS coverage_schemas"))
+    tables = set(inspect(engine).get_table_names())
+    records = CoverageRecords.open_existing(store_url)
+    rows = list(records.iter_batch(batch.id))
+    records.close()
+    assert [(r.name, r.status, r.body) for r in rows] == [("a", "queued", None), ("b", "queued", None)]
+    engine.dispose()
+    assert set(inspect(engine).get_table_names()) == tables
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT schema_version FROM store_meta")).scalar() == 1
+    engine.dispose()
 
 
 def test_the_runner_records_a_jobs_file_and_refuses_a_bad_one(tmp_path):

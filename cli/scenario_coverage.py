@@ -1,13 +1,18 @@
 """``scenario_coverage``: report the coverage of a batch (or of one run) in the terminal, as JSON or as HTML.
 
-    scenario_coverage report RESULTS [--store URL] [--batch ID] [--plan F] [-o FILE] [--fail-under PCT]
-    scenario_coverage html   RESULTS [...] [-o coverage.html]
-    scenario_coverage json   RESULTS [...] [-o FILE]
+    scenario_coverage report [RESULTS] [--store URL] [--batch ID] [--plan F] [-o FILE] [--fail-under PCT]
+    scenario_coverage html   [RESULTS] [...] [-o coverage.html]
+    scenario_coverage json   [RESULTS] [...] [-o FILE]
 
 Thin click commands: the reading, merging and grading is :mod:`coverage_engine.coverage` (and
-:mod:`executor.coverage_source` for ``--store``); here options are parsed and errors become one line.
+:mod:`executor.coverage_source` for a store); here options are parsed, and :mod:`cli.boundary` turns
+errors into messages and exit codes. Where the runs come from: ``RESULTS`` (a results folder or one
+run's folder) unless ``--store`` is on the command line; with ``--store``, or without ``RESULTS``, the
+store (``--store``, ``$SCENARIO_STORE`` or the default file), which is only read: a store that is not
+there is an error and nothing is created or upgraded.
+
 Exit codes: 0 · 1 the grade is below ``--fail-under``, or the results, plan or store cannot be used ·
-2 usage error (the command line itself).
+2 usage error (the command line itself, or no store where one was named) · 130 interrupted.
 """
 
 from __future__ import annotations
@@ -15,58 +20,71 @@ from __future__ import annotations
 import os
 import sys
 import time
-import traceback
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from coverage_engine.errors import OscError
-from store.database import StoreError
+from cli.boundary import Boundary
+from cli.options import debug_option, store_option
+from store.database import StoreError, StoreMissing
+
+if TYPE_CHECKING:
+    from coverage_engine.coverage.model import CoverageReport
 
 PROG = "scenario_coverage"
 EXIT_BELOW = 1
-EXIT_USAGE = 2
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
-
-def _common(func):
-    options = [
-        click.argument("results", required=False, type=click.Path(file_okay=True)),
-        click.option("--store", "store_url", metavar="URL",
-                     help="Read the batch from this store (SQLAlchemy URL) instead of the results folder."),
-        click.option("--batch", "batch_id", type=click.IntRange(min=1), help="With --store: the batch "
-                     "(default: the latest batch of RESULTS, or the latest batch)."),
-        click.option("--plan", "plan_file", type=click.Path(dir_okay=False), metavar="FILE",
-                     help="YAML plan: item weights and per-bucket hit targets (at_least)."),
-        click.option("--fail-under", type=click.FloatRange(0, 100), metavar="PCT",
-                     help="Exit 1 when the overall grade is below PCT percent."),
-        click.option("-d", "--debug", is_flag=True, help="Show tracebacks of errors."),
-    ]
-    for option in reversed(options):
-        func = option(func)
-    return func
+F = TypeVar("F", bound=Callable[..., Any])
 
 
-def _report(results, store_url, batch_id, plan_file):
+def _common(func: F) -> F:
+    """The options every subcommand has, in the order ``--help`` lists them."""
+    func = debug_option(func)
+    func = click.option("--fail-under", type=click.FloatRange(0, 100), metavar="PCT",
+                        help="Exit 1 when the overall grade is below PCT percent.")(func)
+    func = click.option("--plan", "plan_file", type=click.Path(dir_okay=False), metavar="FILE",
+                        help="YAML plan: item weights and per-bucket hit targets (at_least).")(func)
+    func = click.option("--batch", "batch_id", type=click.IntRange(min=1), metavar="ID",
+                        help="The batch of the store (default: the latest batch of RESULTS, or the latest "
+                             "batch).")(func)
+    func = store_option(func)
+    return click.argument("results", required=False, type=click.Path(file_okay=True))(func)
+
+
+def _store_named() -> bool:
+    """Whether ``--store`` is on the command line (``$SCENARIO_STORE`` alone does not replace RESULTS)."""
+    source = click.get_current_context().get_parameter_source("store_url")
+    return source is click.core.ParameterSource.COMMANDLINE
+
+
+def _report(results: str | None, store_url: str | None, batch_id: int | None,
+            plan_file: str | None) -> CoverageReport:
     from coverage_engine.coverage.grading import build_report
     from coverage_engine.coverage.plan import read_plan
 
-    if store_url is None and results is None:
-        raise click.UsageError("missing RESULTS: a results folder, or a run's output folder (or give --store)")
-    if batch_id is not None and store_url is None:
+    named = _store_named()
+    if results is not None and not named and batch_id is not None:
         raise click.UsageError("--batch needs --store")
     plan = read_plan(plan_file) if plan_file else None
-    if store_url is not None:
-        from executor.coverage_source import store_source
-
-        source = store_source(store_url, results, batch_id)
-    else:
+    if results is not None and not named:
         from coverage_engine.coverage.results_folder import read_results_folder
 
-        source = read_results_folder(results)
+        return build_report(read_results_folder(results), plan)
+    from executor.coverage_source import store_source
+
+    try:
+        source = store_source(store_url, results, batch_id)
+    except StoreMissing as exc:
+        if named:
+            raise
+        raise click.UsageError(f"missing RESULTS (a results folder or a run's output folder), and {exc}; "
+                               f"give RESULTS or --store URL") from exc
     return build_report(source, plan)
 
 
-def _gate(report, fail_under) -> int:
+def _gate(report: CoverageReport, fail_under: float | None) -> int:
     """``--fail-under``: one comparison on the computed grade."""
     if fail_under is None:
         return 0
@@ -86,11 +104,13 @@ def _output_path(output: str) -> str:
 @click.command(context_settings=CONTEXT)
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE.")
-def report_command(results, store_url, batch_id, plan_file, fail_under, debug, output):
+def report_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                   fail_under: float | None, debug: bool, output: str | None) -> int:
     """Print the coverage of RESULTS: items, buckets, grades, holes and failing runs."""
     from rich.console import Console
 
     from coverage_engine.coverage.render_text import render_text
+    from executor.terminal import wants_rich
 
     report = _report(results, store_url, batch_id, plan_file)
     if output:
@@ -102,10 +122,9 @@ def report_command(results, store_url, batch_id, plan_file, fail_under, debug, o
         render_text(report, Console(file=buffer, width=120, color_system=None, force_terminal=False), plain=True)
         write_text_atomically(_output_path(output), buffer.getvalue())
     else:
-        terminal = sys.stdout.isatty()
-        console = Console(no_color=bool(os.environ.get("NO_COLOR")) or None, width=None if terminal else 120,
-                          force_terminal=terminal, highlight=False)
-        render_text(report, console, plain=not terminal)
+        rich = wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
+        console = Console(width=None if rich else 120, force_terminal=rich, highlight=False)
+        render_text(report, console, plain=not rich)
     return _gate(report, fail_under)
 
 
@@ -113,7 +132,8 @@ def report_command(results, store_url, batch_id, plan_file, fail_under, debug, o
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="coverage.html", show_default=True,
               help="The HTML file to write (one self-contained file).")
-def html_command(results, store_url, batch_id, plan_file, fail_under, debug, output):
+def html_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                 fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
     from coverage_engine.coverage.atomic import write_text_atomically
     from coverage_engine.coverage.render_html import render_html
@@ -132,7 +152,8 @@ def html_command(results, store_url, batch_id, plan_file, fail_under, debug, out
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="-", show_default=True,
               help="The JSON file to write ('-': standard output).")
-def json_command(results, store_url, batch_id, plan_file, fail_under, debug, output):
+def json_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                 fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
     from coverage_engine.coverage.atomic import write_text_atomically
     from coverage_engine.coverage.render_json import render_json
@@ -146,53 +167,16 @@ def json_command(results, store_url, batch_id, plan_file, fail_under, debug, out
     return _gate(report, fail_under)
 
 
-COMMANDS = {"report": report_command, "html": html_command, "json": json_command}
-
-
-@click.group(context_settings=CONTEXT, commands=COMMANDS)
-def group():
+@click.group(context_settings=CONTEXT,
+             commands={"report": report_command, "html": html_command, "json": json_command})
+def group() -> None:
     """Report the coverage of a batch's results folder (or of one run's folder, or of a batch in the store)."""
 
 
-def _fail(message: str, code: int) -> int:
-    lines = [line.strip() for line in str(message).splitlines()
-             if line.strip() and not line.startswith("(Background on this error")]
-    click.echo(f"{PROG}: error: {' '.join(lines)}", err=True)
-    return code
-
-
 def main(argv: list[str] | None = None) -> None:
-    """Console-script entry point: run a subcommand and map every error to a message and an exit code."""
-    args = list(sys.argv[1:] if argv is None else argv)
-    debug = "-d" in args or "--debug" in args
-    try:
-        code = group.main(args, prog_name=PROG, standalone_mode=False)
-    except (click.exceptions.Abort, KeyboardInterrupt):
-        code = 130
-    except click.UsageError as exc:
-        hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
-        code = _fail(exc.format_message() + hint, EXIT_USAGE)
-    except click.ClickException as exc:
-        code = _fail(exc.format_message(), exc.exit_code)
-    except OscError as exc:
-        if debug:
-            traceback.print_exc()
-        click.echo(exc.render(), err=True)
-        code = 1
-    except StoreError as exc:
-        if debug:
-            traceback.print_exc()
-        code = _fail(str(exc), 1)
-    except OSError as exc:
-        if debug:
-            traceback.print_exc()
-        code = _fail(f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc), 1)
-    except Exception as exc:  # noqa: BLE001 - the last line of defence: one line, traceback with -d
-        if debug:
-            traceback.print_exc()
-        code = _fail(f"internal error: {exc!r} (run with -d for the traceback)", 1)
-    sys.exit(code if isinstance(code, int) else 0)
+    """Console-script entry point; errors become messages and exit codes in :mod:`cli.boundary`."""
+    Boundary(PROG, runtime_errors=(StoreError,), usage_errors=(StoreMissing,)).main(group, argv)
 
 
-if __name__ == "__main__":
+if __name__ == "__main__":  # pragma: no cover
     main()

@@ -235,11 +235,12 @@ def test_a_broken_coverage_json_is_a_located_warning_and_the_run_still_counts(ch
     (["report", "results", "--colour"], "No such option '--colour'"),
     (["publish", "results"], "No such command 'publish'"),
 ])
-def test_usage_errors_exit_2_with_one_line(child_batch, args, message):
+def test_usage_errors_exit_2_with_the_usage_and_one_error_line(child_batch, args, message):
     done = coverage(*args, cwd=child_batch.root)
     assert done.returncode == 2, done.stdout + done.stderr
-    assert len(done.stderr.strip().splitlines()) == 1 and message in done.stderr
-    assert done.stderr.startswith("scenario_coverage: error: ")
+    assert done.stderr.startswith("Usage: scenario_coverage")
+    assert done.stderr.strip().splitlines()[-1].startswith("Error: ") and message in done.stderr.splitlines()[-1]
+    assert "Traceback" not in done.stderr
 
 
 def test_results_that_are_not_there_are_one_clear_line(tmp_path):
@@ -249,5 +250,59 @@ def test_results_that_are_not_there_are_one_clear_line(tmp_path):
     done = coverage("report", "empty", cwd=tmp_path)
     assert done.returncode == 1
     assert done.stderr.startswith("empty: error: no results here")
+
+
+def _sqlite(path, *statements: str) -> bytes:
+    """Run ``statements`` on the SQLite file at ``path``; its bytes afterwards."""
+    import sqlite3
+    from contextlib import closing
+
+    with closing(sqlite3.connect(path)) as conn, conn:
+        for statement in statements:
+            conn.execute(statement)
+    return path.read_bytes()
+
+
+def test_a_store_that_is_not_there_is_a_usage_error_and_nothing_is_created(tmp_path):
     done = coverage("report", "--store", f"sqlite:///{tmp_path / 'none.db'}", cwd=tmp_path)
-    assert done.returncode == 1 and "holds no batch" in done.stderr and "Traceback" not in done.stderr
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr == f"error: there is no store at {tmp_path / 'none.db'} (nothing was created)\n"
+    # Without RESULTS the default store is read; when there is none, RESULTS is what is missing.
+    done = coverage("json", cwd=tmp_path)
+    assert done.returncode == 2 and "missing RESULTS" in done.stderr and ".scenario_store.db" in done.stderr
+    assert list(tmp_path.iterdir()) == []
+    # A SQLite file that holds no store is not made one.
+    other = tmp_path / "other.db"
+    before = _sqlite(other, "CREATE TABLE t (x INTEGER)")
+    done = coverage("html", "--store", f"sqlite:///{other}", cwd=tmp_path)
+    assert done.returncode == 2 and done.stderr == f"error: {other} is not a scenario store (it has no " \
+                                                   f"store_meta table)\n"
+    assert other.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["other.db"]
+    # A store without batches (variation records only, say) is one line and exit 1.
+    from store.database import ensure_schema, open_engine
+
+    engine = open_engine(f"sqlite:///{tmp_path / 'empty.db'}")
+    ensure_schema(engine, [])
+    engine.dispose()
+    done = coverage("report", "--store", f"sqlite:///{tmp_path / 'empty.db'}", cwd=tmp_path)
+    assert done.returncode == 1 and done.stderr == f"error: the store sqlite:///{tmp_path / 'empty.db'} holds no batch\n"
+
+
+def test_an_older_store_is_read_as_it_is_and_a_newer_one_refused(child_batch, tmp_path):
+    """Reading never upgrades: a version-1 store (no coverage tables) reports, byte for byte unchanged."""
+    old = tmp_path / "old.db"
+    shutil.copy(child_batch.root / "store.db", old)
+    before = _sqlite(old, "UPDATE store_meta SET schema_version = 1", "DROP TABLE IF EXISTS job_coverage",
+                     "DROP TABLE IF EXISTS coverage_schemas")
+    doc = report(child_batch.root, "results", "--store", f"sqlite:///{old}")
+    assert doc["runs"]["total"] == 12 and doc["runs"]["failed"] == 6
+    assert doc["items"] == report(child_batch.root, "results")["items"]     # job folders: as from the folder
+    assert old.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.db"]
+
+    newer = _sqlite(old, "UPDATE store_meta SET schema_version = 99")
+    done = coverage("report", "--store", f"sqlite:///{old}", cwd=tmp_path)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert done.stderr == (f"error: the store at sqlite:///{old} has schema version 99, this release reads "
+                           f"versions 1, 2; use a matching release\n")
+    assert old.read_bytes() == newer

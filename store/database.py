@@ -10,14 +10,31 @@ import contextlib
 import os
 from pathlib import Path
 
-from sqlalchemy import Column, Engine, Integer, MetaData, String, Table, create_engine, event, select, text
-from sqlalchemy.exc import SQLAlchemyError
+from sqlalchemy import (
+    Column,
+    Engine,
+    Integer,
+    MetaData,
+    String,
+    Table,
+    create_engine,
+    event,
+    inspect,
+    select,
+    text,
+)
+from sqlalchemy.engine import make_url
+from sqlalchemy.exc import ArgumentError, SQLAlchemyError
 
 #: Shared metadata: table modules register their tables here.
 metadata = MetaData()
 
 #: Bumped whenever a table changes in a way older code cannot read.
-SCHEMA_VERSION = 1
+#: 2: per-job coverage (``coverage_schemas``, ``job_coverage`` in :mod:`store.coverage_records`).
+SCHEMA_VERSION = 2
+
+#: Older versions this release upgrades in place: since them, tables were only added (created on first use).
+UPGRADABLE_FROM = frozenset({1})
 
 #: File name of the default SQLite store, kept in the working directory (like coverage.py's ``.coverage``).
 DEFAULT_STORE_FILE = ".scenario_store.db"
@@ -36,7 +53,7 @@ class StoreError(Exception):
 
 
 class StoreMissing(StoreError):
-    """There is no store at the given place (a read-only command never creates one)."""
+    """There is no store at the given place (a command that only reads never creates one)."""
 
 
 def store_url(option: str | None = None) -> str:
@@ -87,12 +104,10 @@ def open_engine(url: str | None = None) -> Engine:
 
 
 def sqlite_file(url: str) -> str | None:
-    """The database file of a SQLite URL (None for other engines and in-memory databases)."""
-    from sqlalchemy.engine import make_url
-
+    """The database file of a SQLite URL (None for other engines, in-memory databases and bad URLs)."""
     try:
         parsed = make_url(url)
-    except Exception:  # noqa: BLE001 - a malformed URL is reported when it is opened
+    except ArgumentError:   # reported when the URL is opened
         return None
     if not parsed.drivername.startswith("sqlite") or parsed.database in (None, "", ":memory:"):
         return None
@@ -100,10 +115,11 @@ def sqlite_file(url: str) -> str | None:
 
 
 def _check_sqlite_store(path: Path) -> None:
-    """Refuse a SQLite path that holds no store of ours, without changing the file.
+    """Refuse a SQLite path that holds no store, without creating or changing a file.
 
-    Our stores are in WAL mode (header bytes 18-19 are 2); opening one through :func:`open_engine` changes
-    nothing. Any other file is looked at read-only first: opening it for writing would switch it to WAL.
+    Our stores are in WAL mode (header bytes 18-19 are 2): opening one with :func:`open_engine` changes
+    nothing. Any other SQLite file is looked at read-only first, since opening it for writing would
+    switch its journal to WAL.
     """
     if not path.is_file():
         raise StoreMissing(f"there is no store at {path.absolute()} (nothing was created)")
@@ -112,11 +128,11 @@ def _check_sqlite_store(path: Path) -> None:
             header = handle.read(100)
     except OSError as exc:
         raise StoreError(f"cannot read the store {path}: {exc.strerror}") from exc
-    if not header.startswith(b"SQLite format 3\x00") or len(header) < 20:
+    if len(header) < 20 or not header.startswith(b"SQLite format 3\x00"):
         raise StoreMissing(f"{path.absolute()} is not a scenario store (not a SQLite database)")
     if header[18] == 2 and header[19] == 2:
         return
-    import sqlite3
+    import sqlite3  # here: only a store that is not ours yet is looked at this way
 
     try:
         with contextlib.closing(sqlite3.connect(f"{path.absolute().as_uri()}?mode=ro", uri=True)) as conn:
@@ -129,10 +145,12 @@ def _check_sqlite_store(path: Path) -> None:
 
 
 def open_existing(url: str | None = None) -> Engine:
-    """An engine on a store that must already exist, for commands that only read.
+    """An engine on a store that must exist already, for commands that only read.
 
-    Nothing is created or migrated: a SQLite file that does not exist, or a database without the
-    store's version table, raises :class:`StoreMissing`; another release's schema, :class:`StoreError`.
+    Nothing is created, upgraded or migrated: a SQLite file that is not there, or a database without the
+    store's version table, raises :class:`StoreMissing`. A store of a version this release upgrades
+    (:data:`UPGRADABLE_FROM`: tables were only added since) is read as it is, its version row untouched;
+    the tables it lacks read as empty. Any other version raises :class:`StoreError`.
     """
     url = store_url(url)
     path = sqlite_file(url)
@@ -142,8 +160,6 @@ def open_existing(url: str | None = None) -> Engine:
     shown = engine.url.render_as_string(hide_password=True)
     try:
         with engine.connect() as conn:
-            from sqlalchemy import inspect
-
             if not inspect(conn).has_table(store_meta.name):
                 raise StoreMissing(f"{shown} is not a scenario store (it has no {store_meta.name} table)")
             row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
@@ -153,10 +169,12 @@ def open_existing(url: str | None = None) -> Engine:
     except StoreError:
         engine.dispose()
         raise
-    if row is None or row[0] != SCHEMA_VERSION:
+    version = None if row is None else row[0]
+    if version != SCHEMA_VERSION and version not in UPGRADABLE_FROM:
         engine.dispose()
-        raise StoreError(f"the store at {shown} has schema version {row[0] if row else 'none'}, this release "
-                         f"reads version {SCHEMA_VERSION}; use a matching release")
+        readable = ", ".join(str(v) for v in sorted({*UPGRADABLE_FROM, SCHEMA_VERSION}))
+        raise StoreError(f"the store at {shown} has schema version {version if version is not None else 'none'}, "
+                         f"this release reads versions {readable}; use a matching release")
     return engine
 
 
@@ -175,6 +193,9 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
             if row is None:
                 conn.execute(store_meta.insert().values(key="schema", value="scenario-coverage",
                                                         schema_version=SCHEMA_VERSION))
+            elif row[0] in UPGRADABLE_FROM:
+                conn.execute(store_meta.update().where(store_meta.c.key == "schema")
+                             .values(schema_version=SCHEMA_VERSION))
             elif row[0] != SCHEMA_VERSION:
                 raise StoreError(
                     f"the store at {engine.url.render_as_string(hide_password=True)} has schema version {row[0]}, "

@@ -58,16 +58,20 @@ class QueueStore(QueueReads):
 
     @classmethod
     def open_existing(cls, url: str | None = None) -> QueueStore:
-        """Open a store that must exist already, creating and migrating nothing (``status``, ``report``).
+        """Open a store that must exist already, creating and migrating nothing (for commands that read).
 
-        :class:`~store.database.StoreMissing` when there is none at ``url``; a store without the queue's
-        tables reads as one without batches.
+        :class:`~store.database.StoreMissing` when there is no store at ``url``; a store without the
+        queue's tables (only variation records, say) is a :class:`StoreError`: it holds no batch.
         """
         engine = open_existing(url)
-        if not inspect(engine).has_table(batches.name):
-            shown = engine.url.render_as_string(hide_password=True)
+        try:
+            has_batches = inspect(engine).has_table(batches.name)
+        except SQLAlchemyError as exc:
             engine.dispose()
-            raise StoreError(f"the store {shown} holds no batch")
+            raise StoreError(f"cannot use store {engine.url.render_as_string(hide_password=True)}: {exc}") from exc
+        if not has_batches:
+            engine.dispose()
+            raise StoreError(f"the store {engine.url.render_as_string(hide_password=True)} holds no batch")
         return cls(engine)
 
     @property

@@ -1,0 +1,182 @@
+"""``scenario_coverage``: report the coverage of a batch (or of one run) in the terminal, as JSON or as HTML.
+
+    scenario_coverage report [RESULTS] [--store URL] [--batch ID] [--plan F] [-o FILE] [--fail-under PCT]
+    scenario_coverage html   [RESULTS] [...] [-o coverage.html]
+    scenario_coverage json   [RESULTS] [...] [-o FILE]
+
+Thin click commands: the reading, merging and grading is :mod:`coverage_engine.coverage` (and
+:mod:`executor.coverage_source` for a store); here options are parsed, and :mod:`cli.boundary` turns
+errors into messages and exit codes. Where the runs come from: ``RESULTS`` (a results folder or one
+run's folder) unless ``--store`` is on the command line; with ``--store``, or without ``RESULTS``, the
+store (``--store``, ``$SCENARIO_STORE`` or the default file), which is only read: a store that is not
+there is an error and nothing is created or upgraded.
+
+Exit codes: 0 · 1 the grade is below ``--fail-under``, or the results, plan or store cannot be used ·
+2 usage error (the command line itself, or no store where one was named) · 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import click
+
+from cli.boundary import Boundary
+from cli.options import debug_option, store_option
+from store.database import StoreError, StoreMissing
+
+if TYPE_CHECKING:
+    from coverage_engine.coverage.model import CoverageReport
+
+PROG = "scenario_coverage"
+EXIT_BELOW = 1
+CONTEXT = {"help_option_names": ["-h", "--help"]}
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def _common(func: F) -> F:
+    """The options every subcommand has, in the order ``--help`` lists them."""
+    func = debug_option(func)
+    func = click.option("--fail-under", type=click.FloatRange(0, 100), metavar="PCT",
+                        help="Exit 1 when the overall grade is below PCT percent.")(func)
+    func = click.option("--plan", "plan_file", type=click.Path(dir_okay=False), metavar="FILE",
+                        help="YAML plan: item weights and per-bucket hit targets (at_least).")(func)
+    func = click.option("--batch", "batch_id", type=click.IntRange(min=1), metavar="ID",
+                        help="The batch of the store (default: the latest batch of RESULTS, or the latest "
+                             "batch).")(func)
+    func = store_option(func)
+    return click.argument("results", required=False, type=click.Path(file_okay=True))(func)
+
+
+def _store_named() -> bool:
+    """Whether ``--store`` is on the command line (``$SCENARIO_STORE`` alone does not replace RESULTS)."""
+    source = click.get_current_context().get_parameter_source("store_url")
+    return source is click.core.ParameterSource.COMMANDLINE
+
+
+def _report(results: str | None, store_url: str | None, batch_id: int | None,
+            plan_file: str | None) -> CoverageReport:
+    from coverage_engine.coverage.grading import build_report
+    from coverage_engine.coverage.plan import read_plan
+
+    named = _store_named()
+    if results is not None and not named and batch_id is not None:
+        raise click.UsageError("--batch needs --store")
+    plan = read_plan(plan_file) if plan_file else None
+    if results is not None and not named:
+        from coverage_engine.coverage.results_folder import read_results_folder
+
+        return build_report(read_results_folder(results), plan)
+    from executor.coverage_source import store_source
+
+    try:
+        source = store_source(store_url, results, batch_id)
+    except StoreMissing as exc:
+        if named:
+            raise
+        raise click.UsageError(f"missing RESULTS (a results folder or a run's output folder), and {exc}; "
+                               f"give RESULTS or --store URL") from exc
+    return build_report(source, plan)
+
+
+def _gate(report: CoverageReport, fail_under: float | None) -> int:
+    """``--fail-under``: one comparison on the computed grade."""
+    if fail_under is None:
+        return 0
+    grade = report.grade if report.grade is not None else 0.0
+    if grade < fail_under:
+        click.echo(f"{PROG}: coverage grade {grade:.1f} % is below --fail-under {fail_under:g} %", err=True)
+        return EXIT_BELOW
+    return 0
+
+
+def _output_path(output: str) -> str:
+    if os.path.isdir(output):
+        raise click.UsageError(f"-o {output}: is a folder (give a file name)")
+    return output
+
+
+@click.command(context_settings=CONTEXT)
+@_common
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE.")
+def report_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                   fail_under: float | None, debug: bool, output: str | None) -> int:
+    """Print the coverage of RESULTS: items, buckets, grades, holes and failing runs."""
+    from rich.console import Console
+
+    from coverage_engine.coverage.render_text import render_text
+    from executor.terminal import wants_rich
+
+    report = _report(results, store_url, batch_id, plan_file)
+    if output:
+        import io
+
+        from coverage_engine.coverage.atomic import write_text_atomically
+
+        buffer = io.StringIO()
+        render_text(report, Console(file=buffer, width=120, color_system=None, force_terminal=False), plain=True)
+        write_text_atomically(_output_path(output), buffer.getvalue())
+    else:
+        rich = wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
+        console = Console(width=None if rich else 120, force_terminal=rich, highlight=False)
+        render_text(report, console, plain=not rich)
+    return _gate(report, fail_under)
+
+
+@click.command(context_settings=CONTEXT)
+@_common
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="coverage.html", show_default=True,
+              help="The HTML file to write (one self-contained file).")
+def html_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                 fail_under: float | None, debug: bool, output: str) -> int:
+    """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
+    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.coverage.render_html import render_html
+
+    path = _output_path(output)
+    report = _report(results, store_url, batch_id, plan_file)
+    folder = os.path.dirname(os.path.abspath(path))
+    text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
+    write_text_atomically(path, text)
+    grade = "no graded item" if report.grade is None else f"grade {report.grade:.1f} %"
+    click.echo(f"wrote {path} ({grade}, {len(report.runs)} run(s))")
+    return _gate(report, fail_under)
+
+
+@click.command(context_settings=CONTEXT)
+@_common
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="-", show_default=True,
+              help="The JSON file to write ('-': standard output).")
+def json_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+                 fail_under: float | None, debug: bool, output: str) -> int:
+    """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
+    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.coverage.render_json import render_json
+
+    report = _report(results, store_url, batch_id, plan_file)
+    text = render_json(report)
+    if output == "-":
+        sys.stdout.write(text)
+    else:
+        write_text_atomically(_output_path(output), text)
+    return _gate(report, fail_under)
+
+
+@click.group(context_settings=CONTEXT,
+             commands={"report": report_command, "html": html_command, "json": json_command})
+def group() -> None:
+    """Report the coverage of a batch's results folder (or of one run's folder, or of a batch in the store)."""
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point; errors become messages and exit codes in :mod:`cli.boundary`."""
+    Boundary(PROG, runtime_errors=(StoreError,), usage_errors=(StoreMissing,)).main(group, argv)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

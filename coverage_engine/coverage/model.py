@@ -1,0 +1,163 @@
+"""The computed coverage: what every renderer shows, and nothing about how it is shown.
+
+Built once by :func:`coverage_engine.coverage.grading.grade`; the terminal, JSON and HTML renderers
+only read it (the way coverage.py's reports read its ``Analysis``). Grades are percentages.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+#: Item kinds, in the order reports list them.
+KIND_ORDER = ("input", "input_cross", "cover", "cross", "record")
+
+KIND_TITLES = {
+    "input": "varied parameter",
+    "input_cross": "cross of varied parameters",
+    "cover": "cover item",
+    "cross": "cross item",
+    "record": "record item",
+}
+
+
+@dataclass(frozen=True)
+class BucketResult:
+    """One bucket: samples that fell in it (``hits``), the runs that hit it by verdict, and the goal."""
+
+    label: str
+    hits: int
+    passed: int
+    failed: int
+    errored: int
+    target: int
+    failing_runs: tuple[int, ...] = ()   # run ids (into CoverageReport.runs) that failed or errored here
+    low: float | None = None
+    high: float | None = None
+
+    @property
+    def covered(self) -> bool:
+        return self.hits >= self.target
+
+    @property
+    def runs(self) -> int:
+        return self.passed + self.failed + self.errored
+
+    @property
+    def pass_rate(self) -> float | None:
+        """Passed runs over the runs that hit the bucket, in percent (None when no run did)."""
+        total = self.runs
+        return None if total == 0 else 100.0 * self.passed / total
+
+
+@dataclass(frozen=True)
+class CrossGrid:
+    """A cross of two or more items: its axes; its buckets are the cells, the last axis varying fastest."""
+
+    axes: tuple[str, ...]
+    labels: tuple[tuple[str, ...], ...]   # per axis, its bucket labels
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(labels) for labels in self.labels)
+
+
+@dataclass(frozen=True)
+class Extremes:
+    """Min / median / max of a record item's numbers, and the run (index) of each extreme."""
+
+    minimum: float
+    min_run: int
+    median: float
+    maximum: float
+    max_run: int
+
+
+@dataclass(frozen=True)
+class RecordSummary:
+    """A record item's values: count, and its extremes when they are numbers, else its commonest values."""
+
+    count: int
+    extremes: Extremes | None = None
+    top_values: tuple[tuple[str, int], ...] = ()   # for records that are not numbers
+
+
+@dataclass(frozen=True)
+class ItemResult:
+    """One item with its buckets, grade and holes."""
+
+    name: str
+    kind: str
+    buckets: tuple[BucketResult, ...] = ()
+    grade: float | None = None           # None: not graded (records, crosses too big to grid)
+    weight: float = 1.0
+    at_least: int = 1
+    path: str = ""
+    unit: str | None = None
+    type_text: str | None = None
+    text: str | None = None
+    event: str | None = None
+    ignore: str | None = None
+    range: tuple[float, float] | None = None
+    every: float | None = None
+    samples: int = 0
+    runs_sampled: int = 0
+    ignored: int = 0
+    cross: CrossGrid | None = None
+    record: RecordSummary | None = None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def holes(self) -> tuple[int, ...]:
+        """Indices of the buckets below their target."""
+        return tuple(i for i, b in enumerate(self.buckets) if not b.covered)
+
+    @property
+    def covered_count(self) -> int:
+        return sum(1 for b in self.buckets if b.covered)
+
+    @property
+    def graded(self) -> bool:
+        return self.grade is not None
+
+
+@dataclass(frozen=True)
+class RunTable:
+    """Every run of the report, by id: name (the variant to rerun), verdict, reason, folder and log."""
+
+    names: tuple[str, ...]
+    verdicts: tuple[str, ...]
+    reasons: tuple[str | None, ...]
+    folders: tuple[str | None, ...]
+    logs: tuple[str | None, ...]
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def failing(self) -> list[int]:
+        """Ids of the runs that failed or errored, in the natural order of their names (``x2`` before ``x10``)."""
+        ids = [i for i, v in enumerate(self.verdicts) if v in ("failed", "error")]
+        return sorted(ids, key=lambda i: [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", self.names[i])])
+
+
+@dataclass(frozen=True)
+class CoverageReport:
+    """The whole report."""
+
+    source: str
+    complete: bool
+    runs: RunTable
+    verdict_counts: dict[str, int]
+    items: tuple[ItemResult, ...]
+    grade: float | None
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    plan_file: str | None = None
+    root: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def items_of(self, *kinds: str) -> list[ItemResult]:
+        return [item for item in self.items if item.kind in kinds]
+
+    def holes_count(self) -> int:
+        return sum(len(item.holes) for item in self.items if item.graded)

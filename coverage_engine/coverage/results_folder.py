@@ -1,0 +1,244 @@
+"""Runs from a results folder: a batch's (``<job>/{test.xml,coverage.json,log.txt}`` and a merged
+``test.xml``) or a single run's (``test.xml`` and ``coverage.json`` side by side).
+
+Which runs there are, and their verdicts, come from the merged report when there is one (one
+testsuite per job, with the job's ``status``, ``scenario_file`` and ``variation.*`` properties); job
+folders it does not list are added from their own files, and the report is then marked incomplete
+(the batch is still running, or was stopped). A run's varied parameters come from its
+``coverage.json``, else from the merged report's ``variation.*`` properties, else from the ``.sce``
+file the job ran (its ``assignment``).
+
+Files are only read from inside the folder: a job folder or file that is a link leading elsewhere is
+skipped and mentioned. A ``coverage.json`` that cannot be read is reported as a warning with its
+location; the run still counts through its verdict.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import yaml
+
+from coverage_engine.coverage.errors import ResultsError, RunFileError, location
+from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites, run_verdict
+from coverage_engine.coverage.merge import parse_assigned
+from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
+from coverage_engine.coverage.runs import RunInput, RunSource
+
+REPORT_FILE = "test.xml"
+LOG_FILE = "log.txt"
+
+#: Largest .sce file read for its assignment.
+MAX_SCE_BYTES = 16 * 1024 * 1024
+
+#: Verdicts a batch job's ``status`` property names, mapped to run verdicts.
+_STATUS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error"}
+
+
+def _inside(root: Path, path: Path) -> bool:
+    """Whether ``path`` (links resolved) stays inside ``root``."""
+    try:
+        return path.resolve().is_relative_to(root)
+    except OSError:
+        return False
+
+
+def _assignment_from_sce(path: str) -> dict[str, object]:
+    """The ``assignment`` of a ``.sce`` file (YAML), or {} when it cannot be read."""
+    if not path.endswith(".sce"):
+        return {}
+    try:
+        if os.path.getsize(path) > MAX_SCE_BYTES:
+            return {}
+        with open(path, encoding="utf-8") as handle:
+            doc = yaml.safe_load(handle)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return {}
+    assignment = doc.get("assignment") if isinstance(doc, dict) else None
+    if not isinstance(assignment, dict):
+        return {}
+    return {str(k): v for k, v in assignment.items() if isinstance(v, (str, int, float, bool))}
+
+
+class _Reader:
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.notes: list[str] = []
+        self.warnings: list[str] = []
+        self.skipped_links: list[str] = []
+        self.missing_folders = 0
+        self.orders: dict[frozenset, tuple[str, ...]] = {}
+
+    def in_declared_order(self, assignment: dict[str, object], scenario_file: str) -> dict[str, object]:
+        """The report's properties are sorted by name; the first ``.sce`` of a parameter set gives their order."""
+        keys = frozenset(assignment)
+        order = self.orders.get(keys)
+        if order is None:
+            declared = [k for k in _assignment_from_sce(scenario_file) if k in keys]
+            order = self.orders[keys] = tuple(declared) if len(declared) == len(keys) else tuple(assignment)
+        return {k: assignment[k] for k in order}
+
+    def file(self, folder: Path, name: str) -> Path | None:
+        path = folder / name
+        if not os.path.lexists(path):
+            return None
+        if not _inside(self.root, path):
+            self.skipped_links.append(str(path))
+            return None
+        return path if path.is_file() else None
+
+    def coverage(self, folder: Path) -> RunCoverage | None:
+        path = self.file(folder, RUN_FILE)
+        if path is None:
+            return None
+        try:
+            return read_run_coverage(path)
+        except RunFileError as exc:
+            self.warnings.append(f"{exc} (its items are left out; the run still counts)")
+            return None
+
+    def run(self, name: str, folder: Path | None, verdict: str, reason: str | None,
+            assignment: dict[str, object], coverage: RunCoverage | None) -> RunInput:
+        log = self.file(folder, LOG_FILE) if folder is not None else None
+        if coverage is not None and coverage.run.assignment:
+            assignment = dict(coverage.run.assignment)
+        return RunInput(
+            name=name, verdict=verdict, reason=reason, folder=str(folder) if folder is not None else None,
+            log=str(log) if log is not None else None, assignment=assignment,
+            items=coverage.items if coverage else (), samples=coverage.samples if coverage else (),
+            ignored=coverage.ignored if coverage else ())
+
+
+def _job_folders(root: Path, reader: _Reader) -> dict[str, Path]:
+    folders: dict[str, Path] = {}
+    for entry in sorted(os.scandir(root), key=lambda e: e.name):
+        if entry.name.startswith(".") or not entry.is_dir():
+            continue
+        path = root / entry.name
+        if entry.is_symlink() and not _inside(root, path):
+            reader.skipped_links.append(str(path))
+            continue
+        if any(os.path.lexists(path / name) for name in (REPORT_FILE, RUN_FILE, LOG_FILE)):
+            folders[entry.name] = path
+    return folders
+
+
+def _is_merged(report: Path) -> bool:
+    try:
+        for suite in iter_suites(report):
+            return "status" in suite.properties and "scenario_file" in suite.properties
+    except JunitUnreadable:
+        return False
+    return False
+
+
+def _single_run(root: Path, reader: _Reader) -> Iterator[RunInput]:
+    coverage = reader.coverage(root)
+    report = reader.file(root, REPORT_FILE)
+    if report is not None:
+        verdict, reason = run_verdict(report)
+    elif coverage is not None:
+        verdict, reason = coverage.run.verdict, coverage.run.reason
+    else:
+        verdict, reason = "error", "no test.xml"
+    name = (coverage.run.variant if coverage and coverage.run.variant else None) or root.name
+    yield reader.run(name, root, verdict, reason, {}, coverage)
+
+
+def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _Reader,
+                  source: RunSource) -> Iterator[RunInput]:
+    listed: set[str] = set()
+    report_time = report.stat().st_mtime
+    newer = 0
+    try:
+        for suite in iter_suites(report):
+            name = suite.name
+            listed.add(name)
+            verdict = suite.verdict
+            status = _STATUS.get(suite.properties.get("status", ""))
+            if verdict == "passed" and status in ("failed", "error"):
+                verdict = status   # the process failed although its testcases passed
+            reason = None if verdict == "passed" else suite.reason or suite.properties.get("reason")
+            folder = folders.get(name)
+            if folder is None:
+                reader.missing_folders += 1
+            elif any((folder / f).exists() and (folder / f).stat().st_mtime > report_time + 1
+                     for f in (REPORT_FILE, RUN_FILE)):
+                newer += 1
+            assignment = {k[len("variation."):]: parse_assigned(v) for k, v in suite.properties.items()
+                          if k.startswith("variation.")}
+            scenario_file = suite.properties.get("scenario_file", "")
+            if not assignment:
+                assignment = _assignment_from_sce(scenario_file)
+            else:
+                assignment = reader.in_declared_order(assignment, scenario_file)
+            coverage = reader.coverage(folder) if folder is not None else None
+            yield reader.run(name, folder, verdict, reason, assignment, coverage)
+    except JunitUnreadable as exc:
+        raise ResultsError(f"the merged report cannot be read: {exc}", location(str(report))) from None
+    extra = [name for name in folders if name not in listed]
+    if extra or newer:
+        source.complete = False
+        if extra:
+            source.notes.append(f"{len(extra)} job folder(s) are not in the merged report yet (the batch is "
+                                f"still running or was stopped); they are counted from their own files")
+        if newer:
+            source.notes.append(f"{newer} job folder(s) changed after the merged report was written; "
+                                f"their verdicts are those of the report")
+    yield from _unmerged(extra, folders, reader)
+    if reader.missing_folders:
+        source.notes.append(f"{reader.missing_folders} job(s) of the report have no folder here (another "
+                            f"host ran them): only their verdicts and parameters are counted; --store has "
+                            f"their cover items")
+
+
+def _unmerged(names: list[str], folders: dict[str, Path], reader: _Reader) -> Iterator[RunInput]:
+    for name in names:
+        folder = folders[name]
+        coverage = reader.coverage(folder)
+        report = reader.file(folder, REPORT_FILE)
+        if report is not None:
+            verdict, reason = run_verdict(report)
+        elif coverage is not None:
+            verdict, reason = coverage.run.verdict, coverage.run.reason
+        else:
+            verdict, reason = "pending", "no result yet (running, or stopped before it wrote test.xml)"
+        yield reader.run(name, folder, verdict, reason, {}, coverage)
+
+
+def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
+    """The runs of a batch's results folder or of one run's output folder."""
+    given = Path(path)
+    if not given.exists():
+        raise ResultsError("no such folder", location(str(given)))
+    if not given.is_dir():
+        raise ResultsError("not a folder (give a results folder or a run's output folder)", location(str(given)))
+    root = given.resolve()
+    reader = _Reader(root)
+    source = RunSource(label=str(given), runs=iter(()), root=str(root))
+    folders = _job_folders(root, reader)
+    report = reader.file(root, REPORT_FILE)
+    if report is not None and _is_merged(report):
+        runs: Iterator[RunInput] = _merged_batch(root, report, folders, reader, source)
+    elif report is not None or reader.file(root, RUN_FILE) is not None:
+        runs = _single_run(root, reader)
+    elif folders:
+        source.complete = False
+        source.notes.append("no merged test.xml yet: the batch is still running or was stopped; the finished "
+                            "job folders are counted")
+        runs = _unmerged(list(folders), folders, reader)
+    else:
+        raise ResultsError("no results here: expected test.xml or coverage.json, or job folders holding them",
+                           location(str(given)))
+
+    def stream() -> Iterator[RunInput]:
+        yield from runs
+        if reader.skipped_links:
+            source.notes.append(f"{len(reader.skipped_links)} link(s) leading out of the folder were not "
+                                f"followed: {', '.join(reader.skipped_links[:3])}")
+        source.warnings.extend(reader.warnings)
+
+    source.runs = stream()
+    return source

@@ -1,0 +1,55 @@
+"""What the merge reads per run, wherever it came from (a results folder, the store, one run folder).
+
+A :class:`RunInput` is plain data: the run's name (the variant to rerun), its verdict, where its files
+are, the values of its varied parameters, and — when the run wrote a ``coverage.json`` — its items and
+samples. Runs without a ``coverage.json`` still count for input coverage through their verdict and
+assignment.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from coverage_engine.coverage.run_records import ItemDecl
+
+#: Verdicts of a run in a report: the run file's four, plus ``pending`` (queued or running, not finished).
+REPORT_VERDICTS = ("passed", "failed", "error", "skipped", "pending")
+
+
+@dataclass(slots=True)
+class RunInput:
+    """One run for the merge.
+
+    ``schema_key`` may name the item declarations (``items``) shared by many runs, so the merge
+    matches them to its items once instead of once per run (the store keeps declarations that way).
+    ``single`` may replace ``samples`` when every item has exactly one sample: one value per item.
+    ``parameters`` may replace ``assignment``: the parameter names (a tuple shared by many runs) and
+    ``values`` their values in that order (the store keeps assignments that way).
+    """
+
+    name: str
+    verdict: str
+    reason: str | None = None
+    folder: str | None = None
+    log: str | None = None
+    assignment: Mapping[str, object] = field(default_factory=dict)
+    items: Sequence[ItemDecl] = ()
+    samples: Sequence[list] = ()
+    ignored: Sequence[int] = ()
+    schema_key: Hashable | None = None
+    single: Sequence | None = None
+    parameters: tuple[str, ...] | None = None
+    values: Sequence | None = None
+
+
+@dataclass
+class RunSource:
+    """A stream of runs and what is known about the set: where from, whether it is complete, notes."""
+
+    label: str
+    runs: Iterable[RunInput]  # consumed once
+    complete: bool = True
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    root: str | None = None   # the local results folder, for links

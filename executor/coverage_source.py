@@ -1,0 +1,151 @@
+"""Runs of a batch read from the store, as the coverage merge's :class:`RunInput` records.
+
+The store keeps each job's verdict and, when the job wrote a ``coverage.json``, its item declarations
+(shared between jobs) and samples (:mod:`store.coverage_records`). Declarations are decoded and
+validated once per distinct set; per job only its small JSON body is decoded. A job with no coverage
+row still counts for input coverage through its verdict and its variant's assignment (the body's,
+else the ``variants`` record of its scenario file). A job that ran on this host and whose folder
+still holds a ``coverage.json`` the store lacks (a runner that did not record it) is read from there.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+
+from coverage_engine.coverage.errors import RunFileError
+from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
+from coverage_engine.coverage.runs import RunInput, RunSource
+from store.coverage_records import CoverageRecords, StoredRun
+from store.database import StoreError
+from store.queue import QueueStore
+
+_decode = json.JSONDecoder().raw_decode
+
+#: Job states as run verdicts; queued and running jobs are ``pending`` (not finished).
+_VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error",
+             "cancelled": "skipped", "queued": "pending", "running": "pending"}
+
+
+def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
+    if batch_id is not None:
+        return queue.batch(batch_id)
+    if results is not None:
+        folder = os.path.realpath(results)
+        batch = queue.latest_batch(output_dir=folder)
+        if batch is None:
+            raise StoreError(f"the store {queue.url} holds no batch with output folder {folder} "
+                             f"(give --batch ID, or leave out RESULTS for the latest batch)")
+        return batch
+    batch = queue.latest_batch()
+    if batch is None:
+        raise StoreError(f"the store {queue.url} holds no batch")
+    return batch
+
+
+class _StoreRuns:
+    def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource) -> None:
+        self.records, self.batch_id, self.source = records, batch_id, source
+        self.declarations: dict[int, tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]] = {}
+        self.pending = 0
+        self.from_disk = 0
+
+    def _schema(self, schema_id: int) -> tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]:
+        """The item declarations (None when they do not validate) and parameter names of a stored schema."""
+        if schema_id not in self.declarations:
+            text = self.records.declarations([schema_id]).get(schema_id)
+            decls: tuple[ItemDecl, ...] | None = None
+            parameters: tuple[str, ...] = ()
+            try:
+                shared = json.loads(text or "{}")
+                parameters = tuple(str(p) for p in shared.get("parameters") or ())
+                decls = parse_declarations(shared.get("items") or [], f"store schema {schema_id}")
+            except (RunFileError, ValueError, AttributeError) as exc:
+                self.source.warnings.append(f"{exc} (the jobs that use it count without their items)")
+            self.declarations[schema_id] = (decls, parameters)
+        return self.declarations[schema_id]
+
+    def _run(self, row: StoredRun) -> RunInput:
+        verdict = _VERDICTS.get(row.status, "error")
+        if verdict == "pending":
+            self.pending += 1
+        folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
+        if row.body is not None and row.schema_id is not None:
+            return self._recorded_run(row, verdict, folder, row.schema_id, row.body)
+        return self._folder_run(row, verdict, folder)
+
+    def _recorded_run(self, row: StoredRun, verdict: str, folder: str | None, schema_id: int, body: str) -> RunInput:
+        """A job whose coverage the store holds: its body decoded against the shared declarations."""
+        known = self.declarations
+        decls, parameters = known[schema_id] if schema_id in known else self._schema(schema_id)
+        values, one, samples, ignored = _decode(body)[0]
+        log = folder and f"{folder}/log.txt"
+        names = parameters or None
+        assignment: dict[str, object] = {}
+        if names is None and row.variant_assignment:   # the run named no parameters: its variant's record
+            assignment, values = self._variant(row.variant_assignment), None
+        if decls is None:
+            return RunInput(row.name, verdict, row.reason, folder, log, assignment, parameters=names, values=values)
+        return RunInput(row.name, verdict, row.reason, folder, log, assignment, decls, samples or (),
+                        ignored or (), schema_id, one, names, values)
+
+    def _folder_run(self, row: StoredRun, verdict: str, folder: str | None) -> RunInput:
+        """A job without coverage in the store: its ``coverage.json`` when its folder is on this host."""
+        run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder,
+                       log=os.path.join(folder, "log.txt") if folder else None)
+        assignment: dict[str, object] = {}
+        if folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
+            try:
+                coverage = read_run_coverage(os.path.join(folder, RUN_FILE))
+            except RunFileError as exc:
+                self.source.warnings.append(f"{exc} (its items are left out; the run still counts)")
+            else:
+                self.from_disk += 1
+                run.items, run.samples, run.ignored = coverage.items, coverage.samples, coverage.ignored
+                assignment = dict(coverage.run.assignment)
+        if not assignment and row.variant_assignment:
+            assignment = self._variant(row.variant_assignment)
+        run.assignment = assignment
+        return run
+
+    @staticmethod
+    def _variant(text: str) -> dict[str, object]:
+        """A ``variants.assignment`` JSON text as a dict ({} when it is not one)."""
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return {}
+        return value if isinstance(value, dict) else {}
+
+    def __iter__(self) -> Iterator[RunInput]:
+        try:
+            for row in self.records.iter_batch(self.batch_id):
+                yield self._run(row)
+        finally:
+            self.records.close()
+        if self.pending:
+            self.source.complete = False
+            self.source.notes.append(f"the batch is still running: {self.pending} job(s) have not finished; "
+                                     f"this report covers the finished ones")
+        if self.from_disk:
+            self.source.notes.append(f"{self.from_disk} job(s) had no coverage in the store; read from their "
+                                     f"folders on this host")
+
+
+def store_source(url: str | None, results: str | None = None, batch_id: int | None = None) -> RunSource:
+    """The runs of a batch in the store at ``url``: ``batch_id``, else the latest batch whose output folder
+    is ``results``, else the latest batch.
+
+    Reading changes nothing: a store that is not there is :class:`~store.database.StoreMissing` (no file
+    is created) and an older store is read as it is, never upgraded.
+    """
+    queue = QueueStore.open_existing(url)
+    try:
+        batch = _pick_batch(queue, results, batch_id)
+    finally:
+        queue.close()
+    records = CoverageRecords.open_existing(url)
+    source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
+    source.runs = iter(_StoreRuns(records, batch.id, source))
+    return source

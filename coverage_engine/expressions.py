@@ -262,6 +262,10 @@ def coerce(value: TypedExpr, target: OscType, location: syntax.Location, what: s
         if item.is_const:
             return TypedExpr(model.Const([item.value]), target, item.is_literal)
         return TypedExpr(model.MakeList((item.expr,)), target, False)
+    if isinstance(target, PhysicalType) and src in (INT, UINT, FLOAT) and value.is_literal and value.is_const:
+        # a plain number written for a physical quantity is in SI base units, as the reference
+        # implementation reads it (its PyBullet example writes ``position_3d(z: 0.5)``)
+        return TypedExpr(model.Const(float(value.value)), target, True)
     if not _assignable(src, target):
         raise OscTypeError(f"{what}: expected {target}, got {src}", location)
     if value.is_const and (target is FLOAT or target is UINT or isinstance(target, (PhysicalType, ListType))):

@@ -1,0 +1,17 @@
+"""``osc.pybullet``: a PyBullet world for scenarios (DIRECT mode, no display), and its step-based simulation.
+
+``--simulation executor.simulations.pybullet:PyBulletSimulation`` runs a scenario step-based on
+PyBullet. The engine is the optional extra ``pybullet``; it is imported only when a world is made.
+"""
+
+from __future__ import annotations
+
+__all__ = ["PyBulletSimulation"]
+
+
+def __getattr__(name: str):
+    if name == "PyBulletSimulation":
+        from executor.simulations.pybullet.simulation import PyBulletSimulation
+
+        return PyBulletSimulation
+    raise AttributeError(f"module 'executor.simulations.pybullet' has no attribute '{name}'")

@@ -196,13 +196,17 @@ class World:
         c, s = math.cos(yaw), math.sin(yaw)
         return c * linear[0] + s * linear[1], -s * linear[0] + c * linear[1], angular[2]
 
-    def ray_cast(self, starts: list, ends: list) -> list[float]:
-        """The hit fraction (0..1, 1.0 for no hit) of each ray from ``starts[i]`` to ``ends[i]``."""
+    def ray_cast(self, starts: list, ends: list, ignore_group: int = 0) -> list[float]:
+        """The hit fraction (0..1, 1.0 for no hit) of each ray from ``starts[i]`` to ``ends[i]``.
+
+        Bodies in collision filter group ``ignore_group`` (a sensor's own robot) are not hit.
+        """
         fractions: list[float] = []
         limit = self.p.MAX_RAY_INTERSECTION_BATCH_SIZE
+        mask = 0xFFFF & ~ignore_group
         for first in range(0, len(starts), limit):
             hits = self.p.rayTestBatch(starts[first:first + limit], ends[first:first + limit],
-                                       physicsClientId=self.client)
+                                       collisionFilterMask=mask, physicsClientId=self.client)
             fractions.extend(1.0 if hit[0] < 0 else hit[2] for hit in hits)
         return fractions
 

@@ -15,10 +15,11 @@ SIZE = 120  # cells per side
 # walls as (x_min, y_min, x_max, y_max) in metres
 WALLS = [
     (-6.0, -6.0, 6.0, -5.8), (-6.0, 5.8, 6.0, 6.0), (-6.0, -6.0, -5.8, 6.0), (5.8, -6.0, 6.0, 6.0),  # border
+    (-6.0, -0.9, -0.2, -0.7),   # the south room's north wall, west part
+    (1.8, -0.9, 6.0, -0.7),     # ... and east part: a 2 m door between x = -0.2 and x = 1.8
     (1.0, 2.0, 6.0, 2.2),       # shelf wall: the goal (3, 3) lies behind it
-    (-2.2, -6.0, -2.0, -1.5),   # wall from the south border
-    (-3.8, 3.2, -3.2, 3.8),     # pillar
-    (4.0, -1.0, 6.0, -0.8),     # wall from the east border
+    (-3.8, 3.2, -3.2, 3.8),     # pillar in the north room
+    (-3.5, -4.0, -2.5, -3.0),   # crate in the south room
 ]
 
 

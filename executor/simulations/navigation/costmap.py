@@ -159,6 +159,13 @@ class Costmap:
         """Extra cost per cell for being near an obstacle."""
         return self.static_penalty + (self._near_count > 0) * 1.0
 
+    def is_obstacle(self, x: float, y: float) -> bool:
+        """An obstacle (wall or laser mark) in the cell of ``(x, y)``; outside the grid counts as one."""
+        row, col = self.map.cell(x, y)
+        if not self.map.inside(row, col):
+            return True
+        return bool(self.static_occupied[row, col] or self.obstacles[row, col])
+
     def is_lethal(self, x: float, y: float) -> bool:
         row, col = self.map.cell(x, y)
         if not self.map.inside(row, col):

@@ -8,9 +8,11 @@ the laser) and is called at fixed rates of simulated time by whoever owns the wo
 Goals behave like Nav2's ``NavigateToPose``/``NavigateThroughPoses``: a goal is accepted, the
 robot plans on the costmap and follows the path, replans every ``replan_period`` and whenever the
 path ahead is blocked, and the goal *succeeds* when the localised pose is within the goal
-tolerances. It is *aborted* when no path can be found ``planning_retries`` times in a row (the
-costmap's laser obstacles are cleared before each retry, Nav2's recovery), or when the robot has
-not moved ``progress_radius`` in ``progress_timeout`` seconds ``progress_retries`` times.
+tolerances. Three things go wrong the way they do in Nav2: no path is found, the controller sees
+an obstacle right ahead (a collision), or the robot has not moved ``progress_radius`` within
+``progress_timeout``. Each is answered with a recovery (the laser obstacles are cleared from the
+costmap, the robot waits ``recovery_wait``, then plans again); after ``recovery_retries``
+recoveries (Nav2's ``number_of_retries``) the goal is *aborted*.
 """
 
 from __future__ import annotations
@@ -30,7 +32,9 @@ from executor.simulations.navigation.planner import path_length, plan
 class Base(Protocol):
     """What the stack needs from the robot in the engine."""
 
-    radius: float
+    radius: float       # the disk around the centre that must stay free of obstacles
+    front: float        # from the centre to the front bumper
+    half_width: float
 
     def true_pose(self) -> tuple[float, float, float]: ...
 
@@ -56,6 +60,7 @@ class Goal:
     accepted_at: float = 0.0
     finished_at: float | None = None
     path_length_planned: float = 0.0
+    recoveries: int = 0
     trail: list[tuple[float, float]] = field(default_factory=list)
 
     @property
@@ -70,10 +75,11 @@ class StackSettings:
     control_period: float = 0.05       # 20 Hz controller
     sense_period: float = 0.1          # 10 Hz laser
     replan_period: float = 2.0
-    planning_retries: int = 3
+    recovery_retries: int = 6
+    recovery_wait: float = 1.0
     progress_radius: float = 0.5
     progress_timeout: float = 10.0
-    progress_retries: int = 3
+    collision_lookahead: float = 0.2   # m ahead of the robot's front checked while driving forward
     inflation_radius: float = 0.8
     odometry_noise: float = 0.02       # relative standard deviation of measured speeds
     follower: FollowerSettings = field(default_factory=FollowerSettings)
@@ -105,10 +111,10 @@ class RobotStack:
         self.last_command = (0.0, 0.0)
         self.goal: Goal | None = None
         self._next_replan = 0.0
-        self._planning_failures = 0
+        self._recoveries = 0
+        self._paused_until = 0.0
         self._progress_anchor = (initial[0], initial[1])
         self._progress_since = 0.0
-        self._progress_failures = 0
         self._reached_since: float | None = None
         self.now = 0.0
 
@@ -155,6 +161,8 @@ class RobotStack:
         if self.goal is not None and not self.goal.done:
             self._finish(CANCELED, "preempted by a new goal", now)
         self.goal = Goal(list(poses), accepted_at=now)
+        self._recoveries = 0
+        self._paused_until = now
         self._begin_pose(now)
         return self.goal
 
@@ -165,8 +173,6 @@ class RobotStack:
     def _begin_pose(self, now: float) -> None:
         self.follower.set_goal(self.goal.poses[self.goal.index])
         self._next_replan = now
-        self._planning_failures = 0
-        self._progress_failures = 0
         self._progress_anchor = self.pose[:2]
         self._progress_since = now
         self._reached_since = None
@@ -188,6 +194,9 @@ class RobotStack:
         true_x, true_y, _ = self.base.true_pose()
         if not goal.trail or math.hypot(true_x - goal.trail[-1][0], true_y - goal.trail[-1][1]) >= 0.05:
             goal.trail.append((true_x, true_y))
+        if now < self._paused_until:
+            self._drive(0.0, 0.0)
+            return
         if self.follower.goal_reached(pose):
             goal.index += 1
             if goal.index >= len(goal.poses):
@@ -196,11 +205,42 @@ class RobotStack:
                 self._begin_pose(now)
                 self._drive(0.0, 0.0)
             return
-        if not self._plan_if_needed(pose, now):
+        if not self._plan_if_needed(pose, now) or not self._progressing(pose, now):
             return
-        if not self._progressing(pose, now):
+        linear, angular = self.follower.command(pose)
+        if linear > 0.0 and self._collision_ahead(pose):
+            self._recover("the controller saw an obstacle right ahead", now)
             return
-        self._drive(*self.follower.command(pose))
+        self._drive(linear, angular)
+
+    def _recover(self, reason: str, now: float) -> None:
+        """Clear the laser obstacles and wait, or abort the goal when the recoveries are used up."""
+        self._recoveries += 1
+        self.goal.recoveries = self._recoveries
+        self._drive(0.0, 0.0)
+        if self._recoveries > self.settings.recovery_retries:
+            self._finish(ABORTED, f"{reason}; gave up after {self.settings.recovery_retries} recoveries", now)
+            return
+        self.costmap.clear_obstacles()
+        self.follower.set_path([])
+        self._paused_until = self._next_replan = now + self.settings.recovery_wait
+        self._progress_anchor, self._progress_since = self.pose[:2], self._paused_until
+
+    def _collision_ahead(self, pose) -> bool:
+        """An obstacle cell in the strip the robot's front sweeps in the next ``collision_lookahead`` metres."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        front, half_width = self.base.front, self.base.half_width
+        step = self.costmap.resolution / 2.0
+        distance = front
+        while distance <= front + self.settings.collision_lookahead:
+            offset = -half_width
+            while offset <= half_width:
+                if self.costmap.is_obstacle(x + c * distance - s * offset, y + s * distance + c * offset):
+                    return True
+                offset += step
+            distance += step
+        return False
 
     def _plan_if_needed(self, pose, now: float) -> bool:
         """Plan when due or when the path ahead is blocked; False while there is no usable path."""
@@ -211,17 +251,8 @@ class RobotStack:
         target = self.follower.goal
         path = plan(self.costmap, (pose[0], pose[1]), (target[0], target[1]))
         if path is None:
-            self._planning_failures += 1
-            self.follower.set_path([])
-            self._drive(0.0, 0.0)
-            if self._planning_failures >= self.settings.planning_retries:
-                self._finish(ABORTED, f"no path to ({target[0]:.2f}, {target[1]:.2f}) after "
-                             f"{self._planning_failures} attempts", now)
-            else:
-                self.costmap.clear_obstacles()  # recovery: forget what the laser saw, look again
-                self._next_replan = now + 1.0
+            self._recover(f"no path to ({target[0]:.2f}, {target[1]:.2f})", now)
             return False
-        self._planning_failures = 0
         self._next_replan = now + self.settings.replan_period
         current = self.follower.remaining(pose, math.inf)
         if (blocked or not current
@@ -232,7 +263,7 @@ class RobotStack:
         return True
 
     def _progressing(self, pose, now: float) -> bool:
-        """Nav2's progress checker; False when the goal was aborted for lack of progress."""
+        """Nav2's progress checker; False when it called for a recovery."""
         s = self.settings
         if self.follower.position_reached:
             if self._reached_since is None:
@@ -247,12 +278,5 @@ class RobotStack:
             return True
         if now - self._progress_since <= s.progress_timeout:
             return True
-        self._progress_failures += 1
-        if self._progress_failures >= s.progress_retries:
-            self._finish(ABORTED, f"no progress: moved less than {s.progress_radius} m in "
-                         f"{s.progress_timeout:g} s, {self._progress_failures} times", now)
-            return False
-        self.costmap.clear_obstacles()
-        self._progress_since = now
-        self._next_replan = now
-        return True
+        self._recover(f"no progress: moved less than {s.progress_radius} m in {s.progress_timeout:g} s", now)
+        return False

@@ -33,6 +33,8 @@ class HuskyBase:
 
     #: the disk around the centre the robot needs free (between its half width 0.34 m and half length 0.5 m)
     radius = 0.45
+    front = 0.5
+    half_width = 0.35
 
     def __init__(self, world: World, name: str, pose: tuple[float, float, float]) -> None:
         self.world = world

@@ -241,9 +241,14 @@ def test_relative_import_and_unknown_library(tmp_path):
 
 EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples").rglob("*.osc")
                   if "build" not in p.parts)
+#: examples written for language support that is still to come (cover(), range keeps, --strategy lhs)
+AWAITING = pytest.mark.xfail(strict=True, reason="needs cover()/record(), range keeps and --strategy lhs")
+#: examples whose libraries come from an example package: (import line, its Python package)
+EXAMPLE_PACKAGES = {"import osc.example\n": "example_library", "import osc.mujoco_drop\n": "mujoco_drop"}
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+@pytest.mark.parametrize("path", [pytest.param(p, marks=AWAITING) if "    cover(" in p.read_text(encoding="utf-8")
+                                  else p for p in EXAMPLES], ids=[p.name for p in EXAMPLES])
 def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
     import subprocess
@@ -251,6 +256,9 @@ def test_every_example_parses_and_resolves(path, tmp_path):
     from coverage_engine.parser import parse_file
 
     unit = parse_file(path)
+    for line, package in EXAMPLE_PACKAGES.items():
+        if line in unit.text:
+            pytest.importorskip(package, reason=f"the example package {package} is not installed")
     if "in [" in unit.text and "keep(" in unit.text:
         with pytest.raises(UnsupportedFeatureError, match="scenario_variation"):
             load_scenario_file(path)
@@ -261,9 +269,6 @@ def test_every_example_parses_and_resolves(path, tmp_path):
         assert len(variants) > 1 and all(load_scenario_file(v).scenarios for v in variants)
         return
     declares_scenario = any(getattr(d, "kind", None) == "scenario" for d in unit.declarations)
-    needs_example_library = "import osc.example\n" in unit.text
-    if needs_example_library:
-        pytest.importorskip("example_library", reason="examples/example_library is not installed")
     if declares_scenario:
         assert load_scenario_file(path).scenarios
 

@@ -166,3 +166,47 @@ class ActorDistanceTraveled(WorldAction):
             return Status.SUCCESS
         self.feedback_message = f"traveled {self.traveled:.3f} m of {self.distance:.3f} m"
         return Status.RUNNING
+
+
+def _handle(target_variable, action: str):
+    if not hasattr(target_variable, "set_value"):
+        raise ActionError(f"{action}: target_variable must be a variable (var), got {target_variable!r}")
+    return target_variable
+
+
+class SimulationStoreTime(WorldAction):
+    """``sim.store_time(target_variable)``: the world's simulated time into a ``time`` variable."""
+
+    def __init__(self, associated_actor: dict | None = None) -> None:
+        super().__init__(associated_actor)
+        self.resolve_variable_reference_arguments_in_execute = False
+        self.target = None
+
+    def execute(self, target_variable) -> None:
+        self.target = _handle(target_variable, "store_time")
+
+    def update(self) -> Status:
+        self.lease.catch_up()
+        self.target.set_value(self.world.time)
+        self.feedback_message = f"time {self.world.time:.3f} s"
+        return Status.SUCCESS
+
+
+class ActorStorePosition(WorldAction):
+    """``actor.store_position(target_variable)``: the body's base position into a ``position_3d`` variable."""
+
+    def __init__(self, associated_actor: dict | None = None) -> None:
+        super().__init__(associated_actor)
+        self.resolve_variable_reference_arguments_in_execute = False
+        self.target = None
+
+    def execute(self, target_variable) -> None:
+        self.target = _handle(target_variable, "store_position")
+
+    def update(self) -> Status:
+        self.lease.catch_up()
+        world = self.world
+        x, y, z = world.position(world.body(self.actor_name))
+        self.target.set_value({"x": x, "y": y, "z": z})
+        self.feedback_message = f"position ({x:.3f}, {y:.3f}, {z:.3f})"
+        return Status.SUCCESS

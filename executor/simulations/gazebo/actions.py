@@ -19,7 +19,7 @@ def spawn(action: WorldAction, name: str, model: str, x: float, y: float, z: flo
     """Spawn ``model`` as ``name``: a URDF as it is, anything else as a box of its size (logged)."""
     NavigationWorld.of(action.lease)  # the ground and the map come first
     world = action.world
-    choice = choose(model, scenario_folders(action.lease.input_dir), world._data_path)
+    choice = choose(model, scenario_folders(action.lease.input_dir), world.data_path)
     if choice.path is not None:
         world.load_urdf(name, choice.path, (x, y, z), (0.0, 0.0, yaw))
     else:

@@ -57,7 +57,7 @@ class World:
 
     def __init__(self, driver: str = "clock") -> None:
         self.p = engines.pybullet()
-        self._data_path = engines.pybullet_data_path()
+        self.data_path = engines.pybullet_data_path()
         with engines.native_output_silenced():
             self.client = self.p.connect(self.p.DIRECT)
         if self.client < 0:
@@ -126,7 +126,7 @@ class World:
         path = Path(model)
         if path.is_absolute():
             return path if path.is_file() else None
-        for folder in [*folders, self._data_path]:
+        for folder in [*folders, self.data_path]:
             if folder and (Path(folder) / path).is_file():
                 return Path(folder) / path
         return None

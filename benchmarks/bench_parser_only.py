@@ -25,14 +25,14 @@ def make_source(scenarios: int, actions: int = 20) -> str:
     return "\n".join(out)
 
 
-COLD = ("import time; t = time.perf_counter(); from coverage_engine.parser import parse_file;"
-        "from coverage_engine.libraries import find_library;"
+COLD = ("import time; t = time.perf_counter(); from coverage_engine.parse.parser import parse_file;"
+        "from coverage_engine.resolve.libraries import find_library;"
         "[parse_file(find_library(n)) for n in ('osc.types', 'osc.helpers')];"
         "print(time.perf_counter() - t)")
 
 
 def main(argv: list[str]) -> None:
-    from coverage_engine.parser import parse_text
+    from coverage_engine.parse.parser import parse_text
 
     for n in [int(a) for a in argv] or [10, 100, 300]:
         text = make_source(n)

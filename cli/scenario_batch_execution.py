@@ -14,18 +14,17 @@ a runtime error (files, store, report) · 2 the command line is malformed (click
 
 from __future__ import annotations
 
-import math
 import os
 import sys
-import traceback
 
 import click
 
+from cli.boundary import Boundary
+from cli.options import Seconds, debug_option, store_option
 from executor.batch.errors import BatchError, BatchUsageError
 from store.database import StoreError
 
 PROG = "scenario_batch_execution"
-EXIT_USAGE = 2
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
 
@@ -45,33 +44,6 @@ class JobsType(click.ParamType):
             self.fail(f"{value!r} is neither a number nor 'auto'", param, ctx)
         if number < 1:
             self.fail(f"{number} must be at least 1", param, ctx)
-        return number
-
-
-class SecondsType(click.ParamType):
-    """A finite number of seconds: above 0, and at least ``minimum`` when one is given.
-
-    ``nan`` and ``inf`` are refused: they would silently disable a limit (``nan`` compares false to all).
-    """
-
-    name = "S"
-
-    def __init__(self, minimum: float | None = None) -> None:
-        self.minimum = minimum
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float) and math.isfinite(value) and value > 0:
-            return value
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            self.fail(f"{value!r} is not a number of seconds", param, ctx)
-        if not math.isfinite(number):
-            self.fail(f"{value!r} is not a finite number of seconds", param, ctx)
-        if number <= 0:
-            self.fail(f"must be more than 0 s (got {value})", param, ctx)
-        if self.minimum is not None and number < self.minimum:
-            self.fail(f"must be at least {self.minimum:g} s (got {value})", param, ctx)
         return number
 
 
@@ -103,16 +75,6 @@ def _check_command(command) -> None:
         raise click.UsageError(str(exc)) from exc
 
 
-def _store_option(func):
-    return click.option("--store", "store_url", metavar="URL", envvar="SCENARIO_STORE",
-                        help="SQLAlchemy URL of the store (default: $SCENARIO_STORE, else "
-                             "./.scenario_store.db).")(func)
-
-
-def _debug_option(func):
-    return click.option("-d", "--debug", is_flag=True, help="Show tracebacks of errors.")(func)
-
-
 def _open_store(url):
     from store.queue import QueueStore
 
@@ -120,12 +82,14 @@ def _open_store(url):
 
 
 def _typed_options() -> list[str]:
-    """The options of the current command given on its command line or through the environment."""
+    """The options ``--resume`` compares with the stored batch that were given on the command line or
+    through the environment; they are the input folder and the batch options of
+    :data:`executor.batch.orchestration.OPTION_FLAGS`, whose names the click parameters share."""
+    from executor.batch.orchestration import OPTION_FLAGS
+
     ctx = click.get_current_context()
     typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)
-    names = ("input_dir", "timeout", "retries", "post_run", "ignore_rc", "halt_on_failure", "grace", "shard")
-    renamed = {"ignore_rc": "ignore_return_value"}
-    return [renamed.get(name, name) for name in names if ctx.get_parameter_source(name) in typed]
+    return [name for name in ("input_dir", *OPTION_FLAGS) if ctx.get_parameter_source(name) in typed]
 
 
 def _check_post_run(hooks) -> None:
@@ -145,31 +109,31 @@ def _check_post_run(hooks) -> None:
               help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
               help="Jobs run in parallel ('auto': one per CPU).")
-@click.option("--timeout", type=SecondsType(), metavar="S",
+@click.option("--timeout", type=Seconds(), metavar="S",
               help="Seconds a job may run; then its process group gets SIGTERM, then SIGKILL.")
-@click.option("--grace", type=SecondsType(), default=5.0, show_default=True, metavar="S",
+@click.option("--grace", type=Seconds(), default=5.0, show_default=True, metavar="S",
               help="Seconds between SIGTERM/SIGINT and SIGKILL.")
 @click.option("--retries", type=click.IntRange(min=0), default=0, show_default=True, metavar="K",
               help="Repeat a job up to K times after an infrastructure error (no result, signal, timeout).")
 @click.option("--resume", is_flag=True, help="Finish the latest unfinished batch of this output folder.")
 @click.option("--shard", type=ShardType(), metavar="i/N", help="Run only the i-th of N subsets (stable hash of file content).")
 @click.option("--halt-on-failure", is_flag=True, help="Start no new job after the first job that did not pass.")
-@click.option("-r", "--ignore-process-return-value", "ignore_rc", is_flag=True,
+@click.option("-r", "--ignore-process-return-value", "ignore_return_value", is_flag=True,
               help="Judge a job by its test.xml alone.")
 @click.option("--post-run", multiple=True, metavar="CMD", help="Run 'CMD <job output folder>' after each job.")
 @click.option("--enqueue-only", is_flag=True, help="Put the jobs into the (shared) store; 'worker' runs them.")
-@click.option("--lease", type=SecondsType(0.2), default=60.0, show_default=True, metavar="S",
+@click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat before another worker may take it.")
-@_store_option
-@_debug_option
+@store_option
+@debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_rc, post_run, enqueue_only, lease, store_url, debug, command):
+                ignore_return_value, post_run, enqueue_only, lease, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
     """
-    from executor.batch import runner
+    from executor.batch import orchestration
     from executor.batch.progress import make_reporter
     from store.jobs import BatchOptions
 
@@ -178,50 +142,50 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     if not resume or command:
         _check_command(command)
     _check_post_run(post_run)
-    request = runner.BatchRequest(
-        input_dir=input_dir, output_dir=runner.output_folder(output_dir), command=tuple(command),
+    request = orchestration.BatchRequest(
+        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
-                             ignore_return_value=ignore_rc, halt_on_failure=halt_on_failure, grace=grace),
+                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace),
         shard=shard)
     store = _open_store(store_url)
     try:
         if resume:
-            batch = runner.resume_batch(store, request.output_dir, request.command, request, _typed_options())
+            batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
-            batch = runner.create_batch(store, request, mode="shared" if enqueue_only else "local")
+            batch = orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
         if enqueue_only:
             count = sum(store.counts(batch.id).values())
             click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
                        f"'{PROG} worker --store URL' on each host")
             return 0
-        counts, signum = runner.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        report = os.path.join(batch.output_dir, runner.REPORT_FILE)
-        line = runner.summary_line(batch, counts, report)
+        counts, signum = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        report = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        line = orchestration.summary_line(batch, counts, report)
         if signum is not None:
             line += "; interrupted, finish with --resume"
         click.echo(line)
-        return runner.exit_code(counts, signum)
+        return orchestration.exit_code(counts, signum)
     finally:
         store.close()
 
 
 @click.command(context_settings=CONTEXT)
-@_store_option
+@store_option
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
               help="Jobs this worker runs in parallel ('auto': one per CPU).")
 @click.option("--batch", "batch_id", type=int, help="Only this batch (default: every shared batch).")
 @click.option("-o", "--output-root", type=click.Path(file_okay=False),
               help="Put job folders here instead of the batch's output folder.")
-@click.option("--lease", type=SecondsType(0.2), default=60.0, show_default=True, metavar="S",
+@click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat.")
-@click.option("--poll", type=SecondsType(0.01), default=1.0, show_default=True, metavar="S",
+@click.option("--poll", type=Seconds(0.01), default=1.0, show_default=True, metavar="S",
               help="Seconds between looks at an empty queue.")
 @click.option("--wait", "wait_for_work", is_flag=True, help="Keep waiting for new batches (a long-lived pod).")
-@_debug_option
+@debug_option
 def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_for_work, debug):
     """Run queued jobs of the shared store until none is left."""
+    from executor.batch.orchestration import EXIT_INTERRUPTED, run_worker
     from executor.batch.progress import PlainReporter
-    from executor.batch.runner import EXIT_INTERRUPTED, run_worker
     from executor.batch.worker import WorkerSettings
 
     store = _open_store(store_url)
@@ -252,9 +216,9 @@ def _pick_batch(store, batch_id):
 
 
 @click.command(context_settings=CONTEXT)
-@_store_option
+@store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to show (default: the latest).")
-@_debug_option
+@debug_option
 def status_command(store_url, batch_id, debug):
     """Show jobs per state, running jobs per worker and host, and an ETA."""
     from executor.batch.status import render, snapshot
@@ -268,34 +232,26 @@ def status_command(store_url, batch_id, debug):
 
 
 @click.command(context_settings=CONTEXT)
-@_store_option
+@store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
 @click.option("-o", "--output", default="test.xml", show_default=True, type=click.Path(dir_okay=False),
               help="File for the merged JUnit report.")
-@_debug_option
+@debug_option
 def report_command(store_url, batch_id, output, debug):
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
-    from executor.batch import runner
+    from executor.batch import orchestration
 
     store = _open_store(store_url)
     try:
         batch = _pick_batch(store, batch_id)
-        counts = runner.write_batch_report(store, batch, output)
+        counts = orchestration.write_batch_report(store, batch, output)
     finally:
         store.close()
-    click.echo(runner.summary_line(batch, counts, output))
-    return runner.exit_code(counts)
+    click.echo(orchestration.summary_line(batch, counts, output))
+    return orchestration.exit_code(counts)
 
 
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
-
-
-def _fail(message: str, code: int) -> int:
-    """Print ``message`` as one line (driver errors span several; SQLAlchemy adds a link line)."""
-    lines = [line.strip() for line in str(message).splitlines()
-             if line.strip() and not line.startswith("(Background on this error")]
-    click.echo(f"{PROG}: error: {' '.join(lines)}", err=True)
-    return code
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -305,31 +261,9 @@ def main(argv: list[str] | None = None) -> None:
     if args and args[0] in SUBCOMMANDS:
         command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
         args = args[1:]
-    options = args[:args.index("--")] if "--" in args else args
-    debug = "-d" in options or "--debug" in options
-    try:
-        code = command.main(args, prog_name=prog, standalone_mode=False)
-    except (click.exceptions.Abort, KeyboardInterrupt):
-        code = 130
-    except click.UsageError as exc:
-        code = _fail(exc.format_message(), EXIT_USAGE)
-    except BatchUsageError as exc:
-        code = _fail(str(exc), EXIT_USAGE)
-    except click.ClickException as exc:
-        code = _fail(exc.format_message(), exc.exit_code)
-    except (BatchError, StoreError) as exc:
-        if debug:
-            traceback.print_exc()
-        code = _fail(str(exc), 1)
-    except OSError as exc:
-        if debug:
-            traceback.print_exc()
-        code = _fail(f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc), 1)
-    except Exception as exc:  # noqa: BLE001 - the last line of defence: one line, traceback with -d
-        if debug:
-            traceback.print_exc()
-        code = _fail(f"internal error: {exc!r} (run with -d for the traceback)", 1)
-    sys.exit(code if isinstance(code, int) else 0)
+    boundary = Boundary(prog, runtime_errors=(BatchError, StoreError), usage_errors=(BatchUsageError,),
+                        one_line_name=PROG)
+    boundary.main(command, args)
 
 
 if __name__ == "__main__":

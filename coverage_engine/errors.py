@@ -7,7 +7,7 @@ nothing below ``cli/`` prints or exits.
 
 from __future__ import annotations
 
-from coverage_engine.syntax import Location
+from coverage_engine.location import Location
 
 
 class OscError(Exception):

@@ -17,7 +17,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from executor.runtime.results import ScenarioResult
+from executor.results import ScenarioResult
 
 SUITE_NAME = "scenario_execution"
 CLASSNAME = "tests.scenario"

@@ -12,9 +12,12 @@ import socket
 import uuid
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from store.states import JobState
+
+if TYPE_CHECKING:
+    from sqlalchemy import RowMapping
 
 #: Bytes of a job's log kept in the store (the full log stays in the job's output folder).
 LOG_TAIL_BYTES = 64 * 1024
@@ -62,7 +65,7 @@ class Batch:
     options: BatchOptions
 
     @classmethod
-    def from_row(cls, row: Mapping[str, Any]) -> Batch:
+    def from_row(cls, row: Mapping[str, Any] | RowMapping) -> Batch:
         return cls(
             id=row["id"], created_at=row["created_at"], mode=row["mode"], input_dir=row["input_dir"],
             output_dir=row["output_dir"], host=row["host"], command=tuple(json.loads(row["command"])),
@@ -110,7 +113,7 @@ class Job:
     log_tail: str | None = field(default=None, repr=False)
 
     @classmethod
-    def from_row(cls, row: Mapping[str, Any]) -> Job:
+    def from_row(cls, row: Mapping[str, Any] | RowMapping) -> Job:
         values = {name: row[name] for name in cls.__dataclass_fields__ if name in row}
         values["status"] = JobState(values["status"])
         return cls(**values)

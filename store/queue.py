@@ -15,15 +15,16 @@ import json
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import Any
 
 from sqlalchemy import Connection, Engine, func, insert, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 
-from store import queue_sql as sql
+from store import queue_statements as sql
 from store import states
 from store.database import StoreError, ensure_schema, open_engine
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
-from store.queue_queries import QueueQueries
+from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
 from store.states import JobState, Transition
 
@@ -41,7 +42,7 @@ class StoreUnavailable(StoreError):
     """The store could not be reached or was busy; the operation may be retried later."""
 
 
-class QueueStore(QueueQueries):
+class QueueStore(QueueReads):
     """The batch queue in one SQLAlchemy store (SQLite file or PostgreSQL database); reads are inherited."""
 
     def __init__(self, engine: Engine) -> None:
@@ -89,14 +90,14 @@ class QueueStore(QueueQueries):
     # ----------------------------------------------------------------- transitions
     @staticmethod
     def _move(conn: Connection, transition: Transition, target: JobState, where: Sequence,
-              values: dict, returning: Sequence = ()) -> list:
+              values: dict, returning: Sequence = ()) -> Sequence[Any]:
         """Run the one guarded UPDATE of ``transition``; return the rows it changed (ids or ``returning``)."""
         stmt = sql.guarded_update(transition, target, *where).values(**values)
         return conn.execute(stmt.returning(*(returning or [jobs.c.id]))).all()
 
     @staticmethod
     def _holder(job: Job) -> dict:
-        """Bind values of :data:`store.queue_sql.HOLDER` for the attempt ``job`` holds."""
+        """Bind values of :data:`store.queue_statements.HOLDER` for the attempt ``job`` holds."""
         return {"g_job": job.id, "g_holder": job.worker_id, "g_attempt": job.attempts}
 
     # ----------------------------------------------------------------- batches

@@ -28,9 +28,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from itertools import islice
+from typing import Any
 
 from sqlalchemy import (
     Column,
+    ColumnElement,
     DateTime,
     Engine,
     ForeignKey,
@@ -145,13 +147,17 @@ def assignment_json(assignment: Mapping[str, object]) -> str:
 def _upsert(engine: Engine, table: Table, index_elements: list[str], update_columns: list[str] | None):
     """``INSERT … ON CONFLICT`` for SQLite and PostgreSQL; None for other dialects."""
     name = engine.dialect.name
+    stmt: Any
     if name == "sqlite":
-        from sqlalchemy.dialects.sqlite import insert as dialect_insert
+        from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+
+        stmt = sqlite_insert(table)
     elif name == "postgresql":
-        from sqlalchemy.dialects.postgresql import insert as dialect_insert
+        from sqlalchemy.dialects.postgresql import insert as postgresql_insert
+
+        stmt = postgresql_insert(table)
     else:
         return None
-    stmt = dialect_insert(table)
     if not update_columns:
         return stmt.on_conflict_do_nothing(index_elements=index_elements)
     return stmt.on_conflict_do_update(index_elements=index_elements,
@@ -325,7 +331,7 @@ def find_variants(engine: Engine, assignment: Mapping[str, object] | None = None
     wanted += [(k, v, False) for k, v in values.items()]
     ensure_schema(engine, TABLES)
     query = select(variants)
-    conditions = []
+    conditions: list[ColumnElement[bool]] = []
     for key, value, exact in wanted:
         if exact:
             conditions.append(variants.c.assignment.like(

@@ -2,36 +2,15 @@
 
 from __future__ import annotations
 
-import functools
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import pytest
 
 EXE = str(Path(sys.executable).parent / "scenario_execution")
-
-
-@functools.lru_cache(maxsize=1)
-def frontend_problem() -> str | None:
-    """None when the parser and resolver can load a file importing osc.helpers, else the reason."""
-    from coverage_engine.loader import load_scenario_file
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "probe.osc"
-        path.write_text('import osc.helpers\nscenario probe:\n    do serial:\n        log("x")\n'
-                        "        wait elapsed(1s)\n")
-        try:
-            load_scenario_file(path)
-        except Exception as exc:  # noqa: BLE001 - any failure means "not ready yet"
-            return f"{type(exc).__name__}: {exc}"
-    return None
-
-
-needs_frontend = pytest.mark.skipif(frontend_problem() is not None,
-                                    reason=f"front end not ready: {frontend_problem()}")
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
 def run_cli(*args: str, cwd: Path, timeout: float = 60, env: dict | None = None) -> subprocess.CompletedProcess:
@@ -40,3 +19,22 @@ def run_cli(*args: str, cwd: Path, timeout: float = 60, env: dict | None = None)
     full_env.update(env or {})
     return subprocess.run([EXE, *args], cwd=cwd, env=full_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           text=True, timeout=timeout)
+
+
+def example_library_env(target: Path) -> dict[str, str]:
+    """Environment in which ``examples/example_library`` is installed: as is (``.ci/run`` installs it),
+    else installed into ``target`` for the test's child processes. Fails when it cannot be installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("example_library") is not None:
+        return {}
+    errors = []
+    for isolation in (["--no-build-isolation"], []):
+        install = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", *isolation,
+                                  "--target", str(target), str(EXAMPLES / "example_library")],
+                                 capture_output=True, text=True)
+        if install.returncode == 0:
+            return {"PYTHONPATH": str(target)}
+        errors.append(install.stderr.strip())
+    pytest.fail("cannot install examples/example_library (pip install ./examples/example_library):\n"
+                + "\n".join(errors))

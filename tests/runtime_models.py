@@ -1,9 +1,9 @@
-"""Small constructors of :mod:`coverage_engine.model` objects for runtime tests (no parser needed)."""
+"""Small constructors of :mod:`coverage_engine.resolve.model` objects for runtime tests (no parser needed)."""
 
 from __future__ import annotations
 
-from coverage_engine import model as m
-from coverage_engine.syntax import Location
+from coverage_engine.location import Location
+from coverage_engine.resolve import model as m
 
 LOC = Location("test.osc", 1, 1)
 

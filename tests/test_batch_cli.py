@@ -9,6 +9,7 @@ import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import pytest
 from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
 
 
@@ -60,6 +61,7 @@ def test_all_passed_exit_zero_and_osc_files_too(tmp_path):
     assert list(_suites(tmp_path / "deep/results/test.xml")) == ["x1", "x2"]
 
 
+@pytest.mark.slow
 def test_user_errors_are_one_line_without_traceback(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"a": ""})
@@ -223,6 +225,7 @@ def test_post_run_hooks_run_per_job_and_failures_do_not_stop(tmp_path):
     assert result.stderr.count("exit code 4") == 2
 
 
+@pytest.mark.slow
 def test_shards_partition_the_files(tmp_path):
     specs = {f"s{i:02d}": f"print=file {i}" for i in range(12)}
     child = write_child(tmp_path)
@@ -256,6 +259,7 @@ def test_halt_on_failure_starts_nothing_after_a_failure(tmp_path):
     assert sum(int(s.get("skipped", "0")) for s in suites.values()) == 2
 
 
+@pytest.mark.slow
 def test_log_is_written_while_the_child_runs(tmp_path):
     for jobs in ("1", "2"):
         child = write_child(tmp_path)

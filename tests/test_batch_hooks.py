@@ -8,6 +8,7 @@ import threading
 import time
 from pathlib import Path
 
+import pytest
 from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
 
 from executor.hooks import run_post_hooks
@@ -52,6 +53,7 @@ def _start_batch(tmp_path: Path, hook_args: str, grace: str):
     return proc, int(pid_file.read_text())
 
 
+@pytest.mark.slow
 def test_ctrl_c_ends_a_running_post_run_hook_and_skips_the_rest(tmp_path):
     proc, hook_pid = _start_batch(tmp_path, "30", grace="5")
     began = time.monotonic()

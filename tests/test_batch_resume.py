@@ -7,6 +7,7 @@ import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import pytest
 from batch_fixtures import (
     alive,
     child_command,
@@ -43,6 +44,7 @@ def _store_jobs(tmp_path: Path):
         store.close()
 
 
+@pytest.mark.slow
 def test_kill_9_mid_batch_then_resume_runs_each_job_once(tmp_path):
     names = [f"job{i:03d}" for i in range(200)]
     child = write_child(tmp_path)
@@ -122,6 +124,7 @@ def _cases(path: Path) -> dict[str, tuple[str, str | None, str | None]]:
     return out
 
 
+@pytest.mark.slow
 def test_report_written_at_ctrl_c_counts_every_job_and_resume_replaces_it(tmp_path):
     names = [f"s{i}" for i in range(6)]
     child = write_child(tmp_path)

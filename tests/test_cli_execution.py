@@ -9,7 +9,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from cli_support import EXE, needs_frontend, run_cli
+from cli_support import EXE, run_cli
 
 HELPERS = "import osc.helpers\n"
 
@@ -51,7 +51,6 @@ def test_missing_file_with_output_dir_writes_failing_test_xml(tmp_path):
     assert suite.get("failures") == "1" and names == ["Parsing of UNKNOWN.osc"]
 
 
-@needs_frontend
 def test_run_writes_results_and_exit_code(tmp_path):
     write(tmp_path, "ok.osc", HELPERS + "scenario ok:\n    do serial:\n        log('hi there')\n        emit end\n")
     write(tmp_path, "bad.osc", HELPERS + "scenario bad:\n    do serial:\n        log('x')\n        emit fail\n")
@@ -66,7 +65,6 @@ def test_run_writes_results_and_exit_code(tmp_path):
     assert "emit fail" in ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").text
 
 
-@needs_frontend
 def test_action_without_implementation_is_an_error_even_in_dry_run(tmp_path):
     write(tmp_path, "s.osc", HELPERS + "action no_plugin_here:\n    p: string = 'x'\n"
                                        "scenario s:\n    do no_plugin_here()\n")
@@ -76,7 +74,6 @@ def test_action_without_implementation_is_an_error_even_in_dry_run(tmp_path):
     assert done.stdout.startswith("s.osc:")
 
 
-@needs_frontend
 def test_dry_run_and_log_model_execute_nothing(tmp_path):
     write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('executed')\n")
     done = run_cli("s.osc", "-n", "-l", "-o", "out", cwd=tmp_path)
@@ -84,7 +81,6 @@ def test_dry_run_and_log_model_execute_nothing(tmp_path):
     assert "[INFO]" not in done.stdout and not (tmp_path / "out/test.xml").exists()  # … nothing ran
 
 
-@needs_frontend
 def test_multi_scenarios_documents_and_output_dirs(tmp_path):
     write(tmp_path, "two.osc", HELPERS + "scenario a:\n    v: string = 'a-default'\n    do log(v)\n"
                                          "scenario b:\n    w: string = 'b-default'\n    do log(w)\n")
@@ -101,7 +97,6 @@ def test_multi_scenarios_documents_and_output_dirs(tmp_path):
     assert done.returncode == 1 and "a-default" not in done.stdout and "Traceback" not in done.stdout
 
 
-@needs_frontend
 def test_post_run_hooks_in_order_after_test_xml(tmp_path):
     write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('x')\n")
     hook = write(tmp_path, "hook.sh", '#!/bin/sh\necho "$0 $1 $(test -f "$1/test.xml" && echo xml)" >> calls.txt\n'
@@ -113,20 +108,19 @@ def test_post_run_hooks_in_order_after_test_xml(tmp_path):
     assert "exit code 3" in done.stdout
 
 
-@needs_frontend
 def test_sigterm_records_aborted_and_ends_children(tmp_path):
     write(tmp_path, "long.osc", HELPERS + "scenario long:\n    do serial:\n        log('started')\n"
                                           "        run_process('sleep 61.25')\n")
-    process = subprocess.Popen([EXE, "long.osc", "-o", "out"], cwd=tmp_path, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
-    for line in process.stdout:
-        if "started" in line:
-            break
-    time.sleep(0.5)  # the process starts on the next tick
-    assert subprocess.run(["pgrep", "-f", "sleep 61.25"], capture_output=True).returncode == 0
-    process.send_signal(signal.SIGTERM)
-    output = process.stdout.read()
-    process.wait(timeout=20)
+    with subprocess.Popen([EXE, "long.osc", "-o", "out"], cwd=tmp_path, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True) as process:
+        for line in process.stdout:
+            if "started" in line:
+                break
+        time.sleep(0.5)  # the process starts on the next tick
+        assert subprocess.run(["pgrep", "-f", "sleep 61.25"], capture_output=True).returncode == 0
+        process.send_signal(signal.SIGTERM)
+        output = process.stdout.read()
+        process.wait(timeout=20)
     assert process.returncode == 128 + signal.SIGTERM, output
     assert subprocess.run(["pgrep", "-f", "sleep 61.25"], capture_output=True).returncode != 0
     root = ET.parse(tmp_path / "out/test.xml").getroot()
@@ -149,27 +143,26 @@ def start_until(tmp_path: Path, marker: str, *args: str) -> subprocess.Popen:
         if marker in line:
             return process
     process.wait(timeout=20)
+    process.stdout.close()
     raise AssertionError(f"'{marker}' never printed (exit code {process.returncode})")
 
 
-@needs_frontend
 def test_kill_9_keeps_the_results_of_finished_scenarios(tmp_path):
     write(tmp_path, "abc.osc", THREE)
-    process = start_until(tmp_path, "b started", "abc.osc", "-o", "out")
-    process.kill()
-    process.wait(timeout=20)
+    with start_until(tmp_path, "b started", "abc.osc", "-o", "out") as process:
+        process.kill()
+        process.wait(timeout=20)
     suite, names = junit(tmp_path / "out/test.xml")
     assert names == ["a"] and suite.get("failures") == "0"
     assert not list((tmp_path / "out").glob(".test.xml.*"))  # no half-written report left behind
 
 
-@needs_frontend
 def test_ctrl_c_records_scenarios_that_never_started_as_skipped(tmp_path):
     write(tmp_path, "abc.osc", THREE)
-    process = start_until(tmp_path, "b started", "abc.osc", "-o", "out")
-    process.send_signal(signal.SIGINT)
-    output = process.stdout.read()
-    process.wait(timeout=20)
+    with start_until(tmp_path, "b started", "abc.osc", "-o", "out") as process:
+        process.send_signal(signal.SIGINT)
+        output = process.stdout.read()
+        process.wait(timeout=20)
     assert process.returncode == 128 + signal.SIGINT, output
     suite, names = junit(tmp_path / "out/test.xml")
     assert names == ["a", "b", "c"]
@@ -180,7 +173,6 @@ def test_ctrl_c_records_scenarios_that_never_started_as_skipped(tmp_path):
     assert "c done" not in output
 
 
-@needs_frontend
 def test_junit_timestamps_are_iso_8601(tmp_path):
     import datetime
     import re
@@ -219,7 +211,6 @@ class Boom:
 """
 
 
-@needs_frontend
 @pytest.mark.parametrize("dt", ["0", "-0.5", "float('nan')", "float('inf')", "'fast'"])
 def test_simulation_dt_must_be_positive_and_finite(tmp_path, dt):
     write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do log('ran')\n")
@@ -233,7 +224,6 @@ def test_simulation_dt_must_be_positive_and_finite(tmp_path, dt):
     assert names == ["s"] and suite.get("failures") == "1"
 
 
-@needs_frontend
 def test_simulation_step_failure_names_the_step_and_class(tmp_path):
     write(tmp_path, "s.osc", HELPERS + "scenario s:\n    do wait elapsed(1s)\n")
     write(tmp_path, "sims.py", "DT = 0.1\n" + SIMULATIONS)
@@ -282,7 +272,6 @@ def install_plugins(tmp_path: Path) -> None:
          ("raise_shutdown", "RaiseShutdown"))))
 
 
-@needs_frontend
 @pytest.mark.parametrize("action, expected", [
     ("raise_update()", "t.osc:8:9: error: action 'raise_update': update() raised RuntimeError: update exploded"),
     ("raise_execute(3)", "t.osc:8:9: error: action 'raise_execute': execute() raised RuntimeError: "
@@ -300,7 +289,6 @@ def test_plugin_failures_name_the_action_and_its_position(tmp_path, action, expe
     assert ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").get("message") == expected
 
 
-@needs_frontend
 def test_plugin_shutdown_failure_names_the_action_and_its_position(tmp_path):
     install_plugins(tmp_path)
     write(tmp_path, "t.osc", HELPERS + "action raise_shutdown\nscenario s:\n    do serial:\n        log('x')\n"
@@ -315,7 +303,6 @@ def test_plugin_shutdown_failure_names_the_action_and_its_position(tmp_path):
 PARAMETERISED = HELPERS + "scenario x:\n    speed: float = 1.0\n    label: string = 'label is 1'\n    do log(label)\n"
 
 
-@needs_frontend
 @pytest.mark.parametrize("text, expected", [
     ("x:\n  speed: 2.0\n---\nx:\n  nosuch: 1\n", "p.yaml:5:3: error: scenario 'x' has no parameter 'nosuch'"),
     ("nosuch: 1\n", "p.yaml:1:1: error: parameter file names unknown scenario 'nosuch'"),
@@ -334,7 +321,6 @@ def test_parameter_file_errors_name_the_file_and_key(tmp_path, text, expected):
     assert expected in ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").text
 
 
-@needs_frontend
 def test_empty_parameter_document_runs_defaults_and_says_so_once(tmp_path):
     write(tmp_path, "x.osc", PARAMETERISED)
     write(tmp_path, "p.yaml", "x:\n  label: label is 2\n---\n---\nx:\n  label: label is 3\n")

@@ -25,6 +25,7 @@ def expected_passing() -> list[str]:
     return [line.strip() for line in lines if line.strip() and not line.startswith("#")]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (CORPUS / "run.py").exists(), reason=f"conformance corpus not found at {CORPUS}")
 def test_no_conformance_regression(tmp_path):
     report = tmp_path / "report.json"

@@ -5,7 +5,10 @@ from __future__ import annotations
 import subprocess
 import xml.etree.ElementTree as ET
 
+import pytest
 
+
+@pytest.mark.slow
 def test_variation_example_expands_and_runs_in_a_batch(project_root, tmp_path):
     source = project_root / "examples" / "example_scenario_variation" / "example_scenario_variation.osc"
     store = f"sqlite:///{tmp_path / 'store.db'}"

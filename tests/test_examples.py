@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
-import subprocess
-import sys
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import pytest
-from cli_support import needs_frontend, run_cli
+from cli_support import example_library_env, run_cli
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -28,7 +24,6 @@ def in_order(text: str, *parts: str) -> bool:
     return True
 
 
-@needs_frontend
 def test_hello_world(tmp_path):
     started = time.monotonic()
     done = run_cli(str(EXAMPLES / "hello_world/hello_world.osc"), "-o", "out", cwd=tmp_path)
@@ -38,7 +33,6 @@ def test_hello_world(tmp_path):
     assert names(tmp_path / "out/test.xml") == ["hello_world"]
 
 
-@needs_frontend
 def test_external_method_from_another_directory(tmp_path):
     done = run_cli(str(EXAMPLES / "external_method/example_external_method.osc"), cwd=tmp_path)
     assert done.returncode == 0, done.stdout
@@ -46,7 +40,6 @@ def test_external_method_from_another_directory(tmp_path):
     assert any(line.endswith(" 24") for line in lines) and any(line.endswith(" 120") for line in lines)
 
 
-@needs_frontend
 def test_multiple_scenarios(tmp_path):
     done = run_cli(str(EXAMPLES / "multiple_scenarios/two_scenarios.osc"), "-o", "out", cwd=tmp_path)
     assert done.returncode == 0, done.stdout
@@ -55,7 +48,6 @@ def test_multiple_scenarios(tmp_path):
     assert (tmp_path / "out/first_scenario").is_dir() and (tmp_path / "out/second_scenario").is_dir()
 
 
-@needs_frontend
 def test_parameter_override_and_sweep(tmp_path):
     folder = EXAMPLES / "parameter_override"
     done = run_cli(str(folder / "parameter_override.osc"), "--scenario-parameter-file",
@@ -70,7 +62,6 @@ def test_parameter_override_and_sweep(tmp_path):
     assert (tmp_path / "out/parameter_override-0").is_dir() and (tmp_path / "out/fast_run").is_dir()
 
 
-@needs_frontend
 def test_step_based_simulation_runs_faster_than_real_time():
     folder = EXAMPLES / "simulation"
     started = time.monotonic()
@@ -81,24 +72,8 @@ def test_step_based_simulation_runs_faster_than_real_time():
                     "SIM shutdown after 1501 steps")
 
 
-def _example_library_env(tmp_path: Path) -> dict | None:
-    """Environment in which example_library is installed: as is (CI installs it), or into a target dir."""
-    if importlib.util.find_spec("example_library") is not None:
-        return {}
-    target = tmp_path / "site"
-    for isolation in (["--no-build-isolation"], []):
-        install = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", *isolation,
-                                  "--target", str(target), str(EXAMPLES / "example_library")],
-                                 capture_output=True, text=True, cwd=tmp_path)
-        if install.returncode == 0:
-            return {"PYTHONPATH": str(target)}
-    pytest.skip(f"cannot install examples/example_library here: {install.stderr.strip().splitlines()[-1:]}")
-    return None
-
-
-@needs_frontend
 def test_example_library_installed(tmp_path):
-    env = _example_library_env(tmp_path)
+    env = example_library_env(tmp_path / "site")
     scenario = EXAMPLES / "example_library/scenarios/example_library.osc"
     done = run_cli(str(scenario), "-o", "out", cwd=tmp_path, env=env)
     assert done.returncode == 0, done.stdout

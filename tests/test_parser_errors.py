@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from coverage_engine.errors import OscError, OscSyntaxError, UnsupportedFeatureError
-from coverage_engine.parser import parse_file, parse_text
-from coverage_engine.syntax_errors import HINTS
+from coverage_engine.parse.parser import parse_file, parse_text
+from coverage_engine.parse.syntax_errors import HINTS
 
 
 def error_of(text: str) -> OscError:

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from coverage_engine.errors import OscError
-from coverage_engine.parser import parse_text
+from coverage_engine.parse.parser import parse_text
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = [

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from coverage_engine import syntax as s
 from coverage_engine.errors import ImportResolutionError
-from coverage_engine.libraries import OWN_LIBRARIES, _registered, find_library
-from coverage_engine.parser import parse_file
+from coverage_engine.parse import syntax as s
+from coverage_engine.parse.parser import parse_file
+from coverage_engine.resolve.libraries import OWN_LIBRARIES, _registered, find_library
 
 
 @pytest.mark.parametrize("name", OWN_LIBRARIES)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from coverage_engine import syntax as s
 from coverage_engine.errors import UnsupportedFeatureError
-from coverage_engine.parser import parse_file, parse_text
+from coverage_engine.parse import syntax as s
+from coverage_engine.parse.parser import parse_file, parse_text
 
 
 def decls(text: str):

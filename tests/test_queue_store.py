@@ -150,6 +150,7 @@ print("ok")
 """
 
 
+@pytest.mark.slow
 def test_many_processes_create_the_schema_at_once(store_url):
     procs = [subprocess.Popen([sys.executable, "-c", _OPEN, store_url], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for _ in range(6)]

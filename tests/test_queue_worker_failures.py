@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
 from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
 
 from store.queue import QueueStore
@@ -43,6 +44,7 @@ def test_a_job_that_cannot_be_prepared_is_an_error_and_the_others_run(store_url,
     assert ledger(tmp_path) == {"a": 1, "c": 1}
 
 
+@pytest.mark.slow
 def test_claimed_jobs_are_given_back_when_the_store_fails_while_starting_them(pg_url, tmp_path):
     import psycopg
 

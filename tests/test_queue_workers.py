@@ -9,6 +9,7 @@ import xml.etree.ElementTree as ET
 from collections import Counter
 from pathlib import Path
 
+import pytest
 from batch_fixtures import child_command, cli_env, ledger, run_cli, start_cli, write_child, write_scenarios
 
 from store.jobs import BatchOptions, JobSpec
@@ -48,6 +49,7 @@ print(done)
 """
 
 
+@pytest.mark.slow
 def test_four_workers_2000_jobs_each_claimed_and_finished_once(store_url, tmp_path):
     store = QueueStore.open(store_url)
     batch = store.create_batch(mode="shared", input_dir="/in", output_dir="/out", host="h", command=["x"],
@@ -89,6 +91,7 @@ def _enqueue(tmp_path: Path, store_url: str, specs: dict[str, str], env) -> None
     assert not (tmp_path / "results" / "test.xml").exists()
 
 
+@pytest.mark.slow
 def test_enqueue_workers_status_report(store_url, tmp_path):
     env = cli_env(tmp_path)
     names = [f"s{i:02d}" for i in range(24)]
@@ -120,6 +123,7 @@ def test_enqueue_workers_status_report(store_url, tmp_path):
     assert time.monotonic() - start < 10
 
 
+@pytest.mark.slow
 def test_killed_worker_jobs_are_reclaimed_after_lease_expiry(store_url, tmp_path):
     env = cli_env(tmp_path)
     names = [f"k{i:02d}" for i in range(12)]
@@ -154,6 +158,7 @@ def test_killed_worker_jobs_are_reclaimed_after_lease_expiry(store_url, tmp_path
     assert set(runs) == set(names) and not twice, (twice, (tmp_path / "ledger.txt").read_text(), out)
 
 
+@pytest.mark.slow
 def test_worker_survives_connection_loss_without_losing_results(pg_url, tmp_path):
     import psycopg
 

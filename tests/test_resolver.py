@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
 import textwrap
 from pathlib import Path
 
 import pytest
+from cli_support import example_library_env
 
-from coverage_engine import model
 from coverage_engine.errors import (
     ArgumentError,
     NameLookupError,
@@ -16,8 +18,9 @@ from coverage_engine.errors import (
     ParameterFileError,
     UnsupportedFeatureError,
 )
-from coverage_engine.loader import load_scenario_file
-from coverage_engine.model import Const, EnumValue
+from coverage_engine.files.loader import load_scenario_file
+from coverage_engine.resolve import model
+from coverage_engine.resolve.model import Const, EnumValue
 
 
 def load(tmp_path: Path, text: str, overrides=None, name: str = "s.osc") -> model.ScenarioFile:
@@ -251,9 +254,7 @@ EXAMPLE_PACKAGES = {"import osc.example\n": "example_library", "import osc.mujoc
                                   else p for p in EXAMPLES], ids=[p.name for p in EXAMPLES])
 def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
-    import subprocess
-
-    from coverage_engine.parser import parse_file
+    from coverage_engine.parse.parser import parse_file
 
     unit = parse_file(path)
     for line, package in EXAMPLE_PACKAGES.items():
@@ -269,7 +270,11 @@ def test_every_example_parses_and_resolves(path, tmp_path):
         assert len(variants) > 1 and all(load_scenario_file(v).scenarios for v in variants)
         return
     declares_scenario = any(getattr(d, "kind", None) == "scenario" for d in unit.declarations)
-    if declares_scenario:
+    if "import osc.example\n" in unit.text:  # the library of examples/example_library, found by entry point
+        env = dict(os.environ, **example_library_env(tmp_path / "site"))
+        done = subprocess.run(["scenario_execution", "-n", str(path)], capture_output=True, text=True, env=env)
+        assert done.returncode == 0, done.stdout + done.stderr
+    elif declares_scenario:
         assert load_scenario_file(path).scenarios
 
 
@@ -285,7 +290,7 @@ def test_keep_it_equals_sets_a_scenario_parameter(tmp_path):
 
 
 def test_sce_parameters_apply_under_command_line_overrides():
-    from coverage_engine.loader import merge_overrides
+    from coverage_engine.files.loader import merge_overrides
 
     recorded = {"test": {"speed": 3.5, "name": "a"}, "other": {"x": 1}}
     assert merge_overrides(recorded, {"test": {"name": "b"}}) == {
@@ -298,7 +303,7 @@ def test_parsing_and_resolving_never_import_the_runtime(project_root):
     import sys
 
     code = ("import sys\n"
-            "from coverage_engine.loader import load_scenario_file\n"
+            "from coverage_engine.files.loader import load_scenario_file\n"
             "load_scenario_file(sys.argv[1])\n"
             "heavy = [m for m in ('py_trees', 'rich', 'sqlalchemy', 'junit_xml') if m in sys.modules]\n"
             "assert not heavy, heavy\n")

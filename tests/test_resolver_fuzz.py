@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from test_parser_fuzz import mutated
 
 from coverage_engine.errors import OscError
-from coverage_engine.loader import load_scenario_file
+from coverage_engine.files.loader import load_scenario_file
 
 _counter = itertools.count()
 

@@ -9,7 +9,7 @@ import pytest
 from py_trees.common import Status
 from runtime_models import LOC, action, ref, var
 
-from coverage_engine import model as m
+from coverage_engine.resolve import model as m
 from executor.actions import ActionBase, registry
 from executor.runtime.builder import BuildError, make_action
 from executor.runtime.context import ScenarioContext

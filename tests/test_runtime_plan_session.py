@@ -9,12 +9,12 @@ import xml.etree.ElementTree as ET
 import pytest
 from runtime_models import log, parameter, scenario, serial, wait_elapsed
 
-from coverage_engine import model as m
 from coverage_engine.errors import ParameterFileError
+from coverage_engine.resolve import model as m
 from executor.junit import ReportWriter, parse_error_result, write_grouped, write_results
+from executor.results import ScenarioResult
 from executor.runtime.logger import Logger
-from executor.runtime.plan import PlannedRun, plan_runs, split_output_dirs
-from executor.runtime.results import ScenarioResult
+from executor.runtime.planned_runs import PlannedRun, plan_runs, split_output_dirs
 from executor.runtime.session import SessionOptions, run_session
 from executor.simulation import SimulationError, SimulationInterface, load_simulation, reset_arguments
 

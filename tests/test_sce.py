@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from coverage_engine.errors import SceFormatError
-from coverage_engine.sce import (
+from coverage_engine.files.sce import (
     SCE_FORMAT_VERSION,
     SceTemplate,
     parse_sce,

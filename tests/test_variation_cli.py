@@ -7,9 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
-from coverage_engine.sce import read_sce
+from coverage_engine.files.sce import read_sce
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -22,20 +20,6 @@ scenario test:
         log() with:
             keep(it.msg in ['B1', 'B2', 'B3'])
 """
-
-
-def _front_end_works() -> bool:
-    try:
-        from coverage_engine.parser import parse_text
-        from coverage_engine.resolver import resolve
-
-        resolve(parse_text("import osc.helpers\nscenario s:\n    do log('x')\n", "probe.osc"))
-    except Exception:  # noqa: BLE001 - any failure means the front end is not ready yet
-        return False
-    return True
-
-
-pytestmark = pytest.mark.skipif(not _front_end_works(), reason="parser/resolver not ready")
 
 
 def run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:

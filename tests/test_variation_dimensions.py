@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("coverage_engine.parser")
-
-from coverage_engine.parser import parse_text  # noqa: E402
-from coverage_engine.variation.dimensions import find_dimensions, one_line  # noqa: E402
-from coverage_engine.variation.template import TextTemplate  # noqa: E402
+from coverage_engine.parse.parser import parse_text
+from coverage_engine.variation.dimensions import find_dimensions, one_line
+from coverage_engine.variation.template import TextTemplate
 
 TEXT = """import osc.helpers
 

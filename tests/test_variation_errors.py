@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from coverage_engine.sce import read_sce
+from coverage_engine.files.sce import read_sce
 
 ROOT = Path(__file__).resolve().parents[1]
 

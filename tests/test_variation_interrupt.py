@@ -43,6 +43,7 @@ def _rows(db: Path) -> dict:
         }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_stop_keeps_a_row_for_every_file_and_prints_progress(tmp_path, signum):
     (tmp_path / "k.osc").write_text(_keeps(12))  # 531441 combinations: far more than written before the stop

@@ -8,11 +8,9 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("coverage_engine.parser")
-
-from coverage_engine.errors import OscError  # noqa: E402
-from coverage_engine.syntax import Location  # noqa: E402
-from coverage_engine.variation.plan import plan_variation  # noqa: E402
+from coverage_engine.errors import OscError
+from coverage_engine.location import Location
+from coverage_engine.variation.plan import plan_variation
 
 TWO_KEEPS = """import osc.helpers
 

@@ -8,8 +8,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 
 ABSTRACT = """import osc.helpers
@@ -56,7 +54,6 @@ def _logged(result: subprocess.CompletedProcess) -> list[str]:
     return [line for line in (result.stdout + result.stderr).splitlines() if "[log]" in line]
 
 
-@pytest.mark.skipif(not (ROOT / "cli" / "scenario_execution.py").exists(), reason="scenario_execution not there")
 def test_each_variant_logs_like_the_hand_written_file(tmp_path):
     (tmp_path / "rt.osc").write_text(ABSTRACT)
     generated = _tool("scenario_variation", "rt.osc", "-o", "variants", cwd=tmp_path)

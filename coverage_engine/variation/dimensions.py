@@ -9,7 +9,7 @@ A dimension is one such constraint in a scenario:
 
 Only a literal list (``ListExpr``) of at least one value makes a dimension; any other ``in`` there
 (a range ``[1..5]``, an empty list, a string or a name on the right) is an error at its position. The finder reads the syntax tree and never resolves;
-each value keeps its exact source text (cut by :class:`~coverage_engine.syntax.Location` offsets), so
+each value keeps its exact source text (cut by :class:`~coverage_engine.parse.Location` offsets), so
 a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
 
 Dimensions are returned in source order: the first keep in the file is the first dimension, and in
@@ -21,8 +21,10 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import cast
 
-from coverage_engine import syntax as s
+from coverage_engine.location import Location
+from coverage_engine.parse import syntax as s
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,7 +37,7 @@ class Choice:
 
     text: str
     stored: object
-    location: s.Location
+    location: Location
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +57,7 @@ class Dimension:
     choices: tuple[Choice, ...]
     start: int
     end: int
-    location: s.Location
+    location: Location
 
     def replacement(self, choice: int) -> str:
         """The source text replacing the ``in`` expression for ``choices[choice]``."""
@@ -100,7 +102,7 @@ def one_line(text: str) -> str:
     return "".join(out).strip()
 
 
-def _cut(text: str, location: s.Location) -> str:
+def _cut(text: str, location: Location) -> str:
     return text[location.start_pos:location.end_pos]
 
 
@@ -119,7 +121,7 @@ def _stored(item: s.Expression, text: str) -> object:
         return item.value
     if isinstance(item, s.UnaryOp) and item.op == "-" and isinstance(item.operand, s.Literal) \
             and item.operand.kind in ("int", "float"):
-        return -item.operand.value
+        return -cast("int | float", item.operand.value)
     return text
 
 
@@ -136,7 +138,7 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
         return None
     _check_in(expr)
     parts = _path(expr.left)
-    assert parts is not None  # checked by _check_in
+    assert parts is not None and isinstance(expr.right, s.ListExpr)  # checked by _check_in
     path = owner + parts[1:] if parts[0] == "it" else parts
     if parts[0] == "it" and owner_target is not None:
         target: tuple = (*owner_target, tuple(parts[1:]))

@@ -14,7 +14,7 @@ from collections.abc import Callable, Container
 from dataclasses import dataclass
 from pathlib import Path
 
-from coverage_engine.sce import SceTemplate, is_sce_text, relative_source_dir
+from coverage_engine.files.sce import SceTemplate, is_sce_text, relative_source_dir
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
 

@@ -28,14 +28,19 @@ import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from coverage_engine import syntax
 from coverage_engine.errors import OscError
+from coverage_engine.location import Location
+from coverage_engine.parse import syntax
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.template import TextTemplate
 
+if TYPE_CHECKING:
+    from coverage_engine.resolve.model import ScenarioFile
+
 #: ``(concrete text, overrides) -> resolved model``; raises :class:`OscError` when it does not resolve.
-Resolve = Callable[[str, "Mapping | None"], object]
+Resolve = Callable[[str, "Mapping | None"], "ScenarioFile"]
 
 #: Assignment key of the parameter-document dimension.
 DOCUMENT_KEY = "parameter_document"
@@ -75,7 +80,7 @@ class Rejection:
     option: int
     error: OscError
     shown: dict[str, str]
-    location: syntax.Location | None
+    location: Location | None
     skipped: int = 0
 
 
@@ -187,12 +192,12 @@ def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
 
 def default_resolver(path: Path) -> Resolve:
     """Parse and resolve concrete texts of ``path`` (imports relative to its folder)."""
-    from coverage_engine.parser import parse_text
-    from coverage_engine.resolver import resolve
+    from coverage_engine.parse.parser import parse_text
+    from coverage_engine.resolve.resolver import resolve
 
     file, base = str(path), path.parent
 
-    def run(text: str, overrides: Mapping | None) -> object:
+    def run(text: str, overrides: Mapping | None) -> ScenarioFile:
         return resolve(parse_text(text, file), base_dir=base, overrides=overrides)
 
     return run
@@ -215,7 +220,7 @@ def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: s
 
     :func:`check_plan` must be called before the plan's combinations are used.
     """
-    from coverage_engine.parser import parse_text
+    from coverage_engine.parse.parser import parse_text
 
     path = Path(path)
     if text is None:

@@ -10,12 +10,8 @@ __all__ = ["ActionBase", "ActionError", "VariableHandle"]
 
 
 def __getattr__(name: str):
-    if name in ("ActionBase", "ActionError"):
+    if name in __all__:
         from executor.actions import base
 
         return getattr(base, name)
-    if name == "VariableHandle":
-        from executor.runtime.context import VariableHandle
-
-        return VariableHandle
     raise AttributeError(f"module 'executor.actions' has no attribute '{name}'")

@@ -1,4 +1,4 @@
-"""The action plugin API: :class:`ActionBase`.
+"""The action plugin API: :class:`ActionBase` (and the :class:`VariableHandle` it may receive).
 
 An action is a py_trees behaviour with the tutorial's life cycle:
 
@@ -31,7 +31,7 @@ Example (see ``examples/example_library``)::
 Actions get plain values (``int``, ``float`` in SI units, ``str``, ``bool``, lists, dicts for
 structs, ``(name, value)`` tuples for enums). An action that changes variables passes
 ``resolve_variable_reference_arguments_in_execute=False`` to ``super().__init__`` and then receives a
-:class:`~executor.runtime.context.VariableHandle` (``get_value``/``set_value``) for each argument
+:class:`VariableHandle` (``get_value``/``set_value``) for each argument
 that is a ``var``.
 """
 
@@ -75,4 +75,23 @@ class ActionBase(py_trees.behaviour.Behaviour):
             execute(**self._execute_arguments())
 
 
-__all__ = ["ActionBase", "ActionError"]
+__all__ = ["ActionBase", "ActionError", "VariableHandle"]
+
+
+class VariableHandle:
+    """A writable reference to a ``var``, handed to actions that change variables (``increment``)."""
+
+    __slots__ = ("key", "_store")
+
+    def __init__(self, key: str, store: dict[str, object]) -> None:
+        self.key = key
+        self._store = store
+
+    def get_value(self) -> object:
+        return self._store[self.key]
+
+    def set_value(self, value: object) -> None:
+        self._store[self.key] = value
+
+    def __repr__(self) -> str:
+        return f"VariableHandle({self.key!r}={self._store.get(self.key)!r})"

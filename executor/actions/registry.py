@@ -12,7 +12,7 @@ import importlib
 from collections.abc import Iterable, Iterator
 
 from coverage_engine.errors import OscError
-from coverage_engine.model import ActionCall, Behavior, Composite, Modified, Scenario
+from coverage_engine.resolve.model import ActionCall, Behavior, Composite, Modified, Scenario
 
 ENTRY_POINT_GROUP = "scenario_execution.actions"
 

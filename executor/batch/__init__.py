@@ -3,6 +3,6 @@
 Modules: ``inputs`` (files, shards, the launch command), ``job_run`` (one attempt in a thread),
 ``verdict`` (judging an attempt), ``junit_read``/``junit_merge`` (child reports in, the merged report
 out), ``worker`` (the claim/run/finish loop, no SQL), ``progress`` and ``status`` (output for people),
-``runner`` (what the command line calls). Shared with ``scenario_execution``: :mod:`executor.process`
+``orchestration`` (what the command line calls). Shared with ``scenario_execution``: :mod:`executor.process`
 (one child in its own process group, its log, its timeout) and :mod:`executor.hooks` (``--post-run``).
 """

@@ -8,10 +8,10 @@ is set, or with ``-j 1`` (where the child's own output is shown live instead of 
 
 from __future__ import annotations
 
-import os
 import sys
 from typing import TextIO
 
+from executor.terminal import wants_rich
 from store.jobs import Job, JobResult
 from store.states import JobState
 
@@ -112,17 +112,6 @@ class RichReporter(Reporter):
 
     def end(self) -> None:
         self.progress.stop()
-
-
-def wants_rich(stream: TextIO | None = None) -> bool:
-    """Rich display only on a real terminal, without ``NO_COLOR`` and with a capable ``TERM``."""
-    stream = stream or sys.stdout
-    if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
-        return False
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):
-        return False
 
 
 def make_reporter(slots: int) -> Reporter:

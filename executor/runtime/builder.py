@@ -17,8 +17,8 @@ import py_trees
 from py_trees.common import ParallelPolicy
 
 from coverage_engine.errors import OscError
-from coverage_engine.evaluate import EvaluationError, evaluate
-from coverage_engine.model import (
+from coverage_engine.resolve.evaluate import EvaluationError, evaluate
+from coverage_engine.resolve.model import (
     ActionCall,
     Behavior,
     CallMethod,
@@ -31,10 +31,10 @@ from coverage_engine.model import (
     WaitElapsed,
     WaitEvent,
 )
-from executor.actions.base import ActionError
+from executor.actions.base import ActionError, VariableHandle
 from executor.actions.registry import load_action_class
-from executor.runtime import behaviours
-from executor.runtime.context import ScenarioContext, ScenarioEnd, VariableHandle
+from executor.runtime import directives
+from executor.runtime.context import ScenarioContext, ScenarioEnd
 from executor.runtime.modifiers import ModifierError, build_modifier
 
 
@@ -77,15 +77,15 @@ def build_behavior(node: Behavior, context: ScenarioContext) -> py_trees.behavio
         except ModifierError as exc:
             raise BuildError(str(exc), node.location) from exc
     if isinstance(node, WaitElapsed):
-        return behaviours.WaitElapsed(node.name, node.duration, context)
+        return directives.WaitElapsed(node.name, node.duration, context)
     if isinstance(node, WaitCondition):
-        return behaviours.WaitCondition(node.name, node.condition, context)
+        return directives.WaitCondition(node.name, node.condition, context)
     if isinstance(node, WaitEvent):
-        return behaviours.WaitEvent(node.name, node.event, context)
+        return directives.WaitEvent(node.name, node.event, context)
     if isinstance(node, EmitEvent):
-        return behaviours.EmitEvent(node.name, node.event, context)
+        return directives.EmitEvent(node.name, node.event, context)
     if isinstance(node, CallMethod):
-        return behaviours.CallMethod(node.name, node.call, context)
+        return directives.CallMethod(node.name, node.call, context)
     raise BuildError(f"cannot run {type(node).__name__}", getattr(node, "location", None))
 
 

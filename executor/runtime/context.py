@@ -1,16 +1,21 @@
 """Run-time state of one scenario: variables, events, clock, directories, and how it ends.
 
 Behaviours and actions share one :class:`ScenarioContext` per scenario run. Variables are kept by
-:attr:`coverage_engine.model.Variable.key`, so nested ``var`` members (``actor.struct.count``) are
+:attr:`coverage_engine.resolve.model.Variable.key`, so nested ``var`` members (``actor.struct.count``) are
 as easy to reach as scenario-level ones. ``emit end``/``emit fail`` raise :class:`ScenarioEnd`, which
 unwinds the tick at once: nothing after them runs, in the same serial or anywhere else.
 """
 
 from __future__ import annotations
 
-from coverage_engine.evaluate import evaluate
-from coverage_engine.model import Expr, Scenario
+from typing import TYPE_CHECKING
+
+from coverage_engine.resolve.evaluate import evaluate
+from coverage_engine.resolve.model import Expr, Scenario
 from executor.runtime.logger import Logger
+
+if TYPE_CHECKING:
+    from executor.simulation import Clock
 
 
 class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error
@@ -33,25 +38,6 @@ class Aborted(BaseException):  # noqa: N818 - raised by the signal handler; not 
         self.signum = signum
 
 
-class VariableHandle:
-    """A writable reference to a ``var``, handed to actions that change variables (``increment``)."""
-
-    __slots__ = ("key", "_store")
-
-    def __init__(self, key: str, store: dict[str, object]) -> None:
-        self.key = key
-        self._store = store
-
-    def get_value(self) -> object:
-        return self._store[self.key]
-
-    def set_value(self, value: object) -> None:
-        self._store[self.key] = value
-
-    def __repr__(self) -> str:
-        return f"VariableHandle({self.key!r}={self._store.get(self.key)!r})"
-
-
 class ScenarioContext:
     """Everything a running scenario's behaviours share.
 
@@ -59,7 +45,7 @@ class ScenarioContext:
     ``processes`` the run_process actions by name (label), for process_log_check.
     """
 
-    def __init__(self, name: str, clock: object, logger: Logger, input_dir: str | None = None,
+    def __init__(self, name: str, clock: Clock, logger: Logger, input_dir: str | None = None,
                  output_dir: str | None = None, simulation: object | None = None) -> None:
         self.name = name
         self.clock = clock

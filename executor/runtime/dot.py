@@ -8,7 +8,7 @@ import subprocess
 from collections.abc import Sequence
 
 from executor.runtime.logger import Logger
-from executor.runtime.plan import PlannedRun
+from executor.runtime.planned_runs import PlannedRun
 
 
 def write_dot_files(runs: Sequence[PlannedRun], directory: str, logger: Logger) -> list[str]:

@@ -1,14 +1,21 @@
 """Python side of the ``osc.helpers`` external methods ``common`` (run-time directories) and ``random``.
 
-``common.get_output_directory()`` and ``common.get_scenario_file_directory()`` return absolute paths
-of the running scenario; the runtime publishes them with :func:`set_directories` before each run.
+``helpers.osc`` declares them as ``is external osc.helpers.<function>()``; :func:`provide` serves that
+name from this module, so the library names no module of the runtime. ``common.get_output_directory()``
+and ``common.get_scenario_file_directory()`` return absolute paths of the running scenario; the
+runtime publishes them with :func:`set_directories` before each run.
 """
 
 from __future__ import annotations
 
 import os
 
-_directories = {"scenario_file": None, "output": None}
+from coverage_engine.resolve.evaluate import provide_module
+
+#: The module name ``helpers.osc`` gives its external methods.
+HELPERS_MODULE = "osc.helpers"
+
+_directories: dict[str, str | None] = {"scenario_file": None, "output": None}
 
 
 def set_directories(scenario_file_directory: str | None, output_directory: str | None) -> None:
@@ -57,3 +64,15 @@ def get_random_list_element(elements_list: list) -> object:
     import random
 
     return random.choice(elements_list) if elements_list else None
+
+
+def provide() -> None:
+    """Serve the external methods of ``osc.helpers`` from this module (before a scenario runs)."""
+    provide_module(HELPERS_MODULE, {
+        "get_scenario_file_directory": get_scenario_file_directory,
+        "get_output_directory": get_output_directory,
+        "seed": seed,
+        "get_float": get_float,
+        "get_int": get_int,
+        "get_random_list_element": get_random_list_element,
+    })

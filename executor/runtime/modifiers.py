@@ -5,7 +5,7 @@ failure fails at once. ``retry(count)``: a failure starts the child again, faili
 ``count``-th failure. ``timeout(duration)``: fails (and stops the child) once ``duration`` seconds
 of scenario time have passed. ``inverter`` swaps success and failure. The six
 ``<status>_is_<status>`` converters map one status of the child to another. Several modifiers nest
-as the model says (:class:`coverage_engine.model.Modified`).
+as the model says (:class:`coverage_engine.resolve.model.Modified`).
 """
 
 from __future__ import annotations

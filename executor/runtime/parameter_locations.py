@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-from coverage_engine.syntax import Location
+from coverage_engine.location import Location
 
 _QUOTED = re.compile(r"'([^'\n]+)'")
 

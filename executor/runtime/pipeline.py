@@ -74,13 +74,13 @@ def _load(request: ExecutionRequest, logger: Logger):
     names one); an empty document is said once, as it runs every scenario with its defaults.
     """
     from coverage_engine.errors import ParameterFileError
-    from coverage_engine.loader import load_scenario_file
-    from executor.runtime.plan import split_output_dirs
+    from coverage_engine.files.loader import load_scenario_file
+    from executor.runtime.planned_runs import split_output_dirs
 
     documents: list = [None]
     path = request.parameter_file
     if path:
-        from coverage_engine.parameters import read_parameter_documents
+        from coverage_engine.files.parameters import read_parameter_documents
 
         documents = read_parameter_documents(path) or [None]
         for index, document in enumerate(documents):
@@ -109,7 +109,7 @@ def execute(request: ExecutionRequest) -> int:
         if not request.parameter_file:
             raise UsageProblem("--create-scenario-parameter-file-template needs --scenario-parameter-file FILE "
                                "(the template is written there)")
-        from coverage_engine.parameters import write_parameter_template
+        from coverage_engine.files.parameters import write_parameter_template
 
         write_parameter_template(request.scenario, request.parameter_file)
         logger.info(f"Wrote scenario parameter template {request.parameter_file}")
@@ -138,7 +138,7 @@ def execute(request: ExecutionRequest) -> int:
         raise
 
     if request.log_model:
-        from coverage_engine.printer import format_model
+        from coverage_engine.resolve.printer import format_model
 
         for scenario_file, _ in loaded:
             print(format_model(scenario_file), flush=True)
@@ -148,8 +148,8 @@ def execute(request: ExecutionRequest) -> int:
 
 
 def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
-    from coverage_engine.evaluate import add_import_paths
-    from executor.runtime.plan import plan_runs
+    from coverage_engine.resolve.evaluate import add_import_paths
+    from executor.runtime.planned_runs import plan_runs
     from executor.runtime.session import SessionOptions, run_session
 
     scenario_dir = os.path.dirname(os.path.abspath(request.scenario))
@@ -173,7 +173,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
         except SimulationError as exc:
             if output_root:  # CI sees that nothing ran, and why
                 from executor.junit import write_grouped
-                from executor.runtime.results import ScenarioResult
+                from executor.results import ScenarioResult
 
                 write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
                               output_root, request.per_scenario)

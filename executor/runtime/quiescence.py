@@ -18,15 +18,7 @@ import math
 import py_trees
 from py_trees.common import ParallelPolicy, Status
 
-from coverage_engine.model import (
-    Const,
-    FieldOf,
-    MakeList,
-    MakeStruct,
-    Operation,
-    VariableRef,
-)
-from executor.runtime import behaviours
+from executor.runtime import directives
 from executor.runtime.modifiers import ClockTimeout
 
 NOW = -math.inf
@@ -38,33 +30,18 @@ _PURE_DECORATORS = (py_trees.decorators.Inverter, py_trees.decorators.Repeat, py
                     py_trees.decorators.SuccessIsFailure, py_trees.decorators.SuccessIsRunning)
 
 
-def is_pure(expr) -> bool:
-    """True when computing ``expr`` depends on variables only (no external method)."""
-    if isinstance(expr, (Const, VariableRef)):
-        return True
-    if isinstance(expr, Operation):
-        return all(is_pure(o) for o in expr.operands)
-    if isinstance(expr, FieldOf):
-        return is_pure(expr.target)
-    if isinstance(expr, MakeList):
-        return all(is_pure(i) for i in expr.items)
-    if isinstance(expr, MakeStruct):
-        return all(is_pure(v) for _, v in expr.members)
-    return False
-
-
 def next_wake(node: py_trees.behaviour.Behaviour) -> float:
     """Earliest clock time at which ticking ``node`` (RUNNING) could make a difference.
 
     The contract: for every clock time ``t < next_wake(root)`` a tick is a no-op.
     """
     kind = type(node)
-    if kind is behaviours.WaitElapsed:
+    if kind is directives.WaitElapsed:
         return node.finish
-    if kind is behaviours.WaitEvent:
+    if kind is directives.WaitEvent:
         # emitted later in the same tick (by a branch ticked after this one): seen next tick
         return NOW if node.event in node.context.events else NEVER
-    if kind is behaviours.WaitCondition:
+    if kind is directives.WaitCondition:
         if not node.pure:
             return NOW
         try:

@@ -15,11 +15,11 @@ import signal
 from collections.abc import Callable
 from contextlib import contextmanager
 
+from executor.results import ScenarioResult
+from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
-from executor.runtime.external_methods import set_directories
 from executor.runtime.logger import Logger
-from executor.runtime.plan import PlannedRun
-from executor.runtime.results import ScenarioResult
+from executor.runtime.planned_runs import PlannedRun
 from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments, simulation_dt
 
 #: The message of a scenario that an abort kept from starting.
@@ -76,13 +76,14 @@ def abort_on_signals():
 
 def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger) -> SessionOutcome:
     """Run every planned scenario and return the results (never raises for a scenario's failure)."""
-    from executor.runtime.runner import RunAborted, ScenarioRunner
+    from executor.runtime.tick_loop import RunAborted, ScenarioRunner
 
     outcome = SessionOutcome()
     results = outcome.results
     simulation = options.simulation
     sim_clock = None
     on_result = options.on_result
+    external_methods.provide()
     with abort_on_signals():
         try:
             if simulation is not None:
@@ -101,7 +102,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
             for run in runs:
                 if run.output_dir:
                     os.makedirs(run.output_dir, exist_ok=True)
-                set_directories(options.input_dir, run.output_dir or options.output_root)
+                external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
                 if simulation is not None:
                     failure = _reset_simulation(simulation, run)
                     if failure is not None:

@@ -1,0 +1,101 @@
+"""The one error boundary of every command: exceptions become a message on stderr and an exit code.
+
+Exit codes, the same for all commands: 0 success · 1 a runtime error (bad input, a file or store
+problem) or a failed result · 2 a usage error (click's own, or one the command declares) · 130
+interrupted (Ctrl-C; SIGTERM where the command maps it). Messages: an
+:class:`~coverage_engine.errors.OscError` as ``file:line:col: error: …`` with the source line and a
+caret; anything else as ``error: …``. A command run by scripts on many hosts
+(``scenario_batch_execution``) asks for one line per message, prefixed by its name. A traceback is
+shown only with ``-d/--debug``, which the shared option reports here while the command line is parsed
+(:func:`cli.options.debug_option`); an error of ours that no one expected says "internal error".
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+import click
+
+from coverage_engine.errors import OscError
+
+EXIT_FAILED = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+ErrorTypes = tuple[type[BaseException], ...]
+
+
+class Boundary:
+    """Runs one click command and maps whatever escapes it; ``prog`` is the name in usage texts.
+
+    ``runtime_errors`` are the command's own expected errors (message, exit 1); ``usage_errors`` its
+    own malformed-command-line errors (exit 2, like click's). ``one_line_name``: print every message on
+    one line as ``<name>: error: …``.
+    """
+
+    def __init__(self, prog: str, *, runtime_errors: ErrorTypes = (), usage_errors: ErrorTypes = (),
+                 one_line_name: str | None = None) -> None:
+        self.prog = prog
+        self.runtime_errors = runtime_errors
+        self.usage_errors = usage_errors
+        self.one_line_name = one_line_name
+        self.tracebacks = False
+
+    def show_tracebacks(self) -> None:
+        """Called by ``-d/--debug`` while the command line is parsed."""
+        self.tracebacks = True
+
+    def main(self, command: click.Command, args: Sequence[str] | None = None) -> NoReturn:
+        """Run ``command`` with ``args`` (default: the process's) and exit with its code."""
+        sys.exit(self.run(command, args))
+
+    def run(self, command: click.Command, args: Sequence[str] | None = None) -> int:
+        """Run ``command``; returns its exit code (the callback's int, or the code of what escaped)."""
+        argv = list(sys.argv[1:] if args is None else args)
+        try:
+            code = command.main(argv, prog_name=self.prog, standalone_mode=False, obj=self)
+        except (click.exceptions.Abort, KeyboardInterrupt):
+            self._say("interrupted")
+            return EXIT_INTERRUPTED
+        except click.ClickException as exc:
+            if self.one_line_name is None:
+                exc.show()
+            else:
+                self._say(f"error: {exc.format_message()}")
+            return exc.exit_code
+        except self.usage_errors as exc:
+            self._say(f"error: {exc}")
+            return EXIT_USAGE
+        except OscError as exc:
+            self._traceback()
+            self._say(exc.render() if self.one_line_name is None else str(exc))
+            return EXIT_FAILED
+        except self.runtime_errors as exc:
+            self._traceback()
+            self._say(f"error: {exc}")
+            return EXIT_FAILED
+        except OSError as exc:
+            self._traceback()
+            self._say(f"error: {exc.strerror or exc}: {exc.filename}" if exc.filename else f"error: {exc}")
+            return EXIT_FAILED
+        except Exception as exc:  # noqa: BLE001 - the last line of defence: a bug of ours, no traceback without -d
+            self._traceback()
+            self._say(f"error: internal error: {type(exc).__name__}: {exc} (run with -d for the traceback)")
+            return EXIT_FAILED
+        return code if isinstance(code, int) else 0
+
+    def _traceback(self) -> None:
+        if self.tracebacks:
+            import traceback  # only here: importing it costs a millisecond of every start
+
+            traceback.print_exc()
+
+    def _say(self, message: str) -> None:
+        if self.one_line_name is not None:
+            # driver errors span several lines and SQLAlchemy adds a link line: one line for logs
+            lines = [line.strip() for line in message.splitlines()
+                     if line.strip() and not line.startswith("(Background on this error")]
+            message = f"{self.one_line_name}: {' '.join(lines)}"
+        click.echo(message, err=True)

@@ -1,0 +1,57 @@
+"""Entry point of the front end: a scenario file (``.osc`` or ``.sce``) in, a resolved model out.
+
+This is the only function the executor and the commands need: ``load_scenario_file``. It reads the
+file, parses it (``coverage_engine.parse.parser``), and resolves it with optional parameter overrides
+(``coverage_engine.resolve.resolver``). It never imports the runtime.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from coverage_engine.errors import OscError
+from coverage_engine.resolve.model import ScenarioFile
+
+SCENARIO_SUFFIXES = (".osc", ".sce")
+
+
+def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None = None) -> ScenarioFile:
+    """Parse and resolve ``path``; ``overrides`` is one YAML document of scenario parameter values.
+
+    Raises :class:`~coverage_engine.errors.OscError` (with a location) for anything wrong in the input.
+    """
+    from coverage_engine.parse.parser import parse_file, parse_text
+    from coverage_engine.resolve.resolver import resolve
+
+    path = Path(path)
+    if path.suffix not in SCENARIO_SUFFIXES:
+        raise OscError(f"{path}: not a scenario file (expected .osc or .sce)")
+    if not path.is_file():
+        raise OscError(f"{path}: no such file")
+    if path.suffix == ".sce":
+        from coverage_engine.files.sce import read_sce
+
+        document = read_sce(path)
+        unit = parse_text(document.text, str(path))
+        base_dir = Path(document.source_dir)
+        if document.parameters:
+            recorded = {k: v for k, v in document.parameters.items() if k != "_output_dir"}
+            overrides = merge_overrides(recorded, overrides)
+    else:
+        unit = parse_file(path)
+        base_dir = path.parent
+    return resolve(unit, base_dir=base_dir, overrides=overrides)
+
+
+def merge_overrides(base: Mapping[str, object], top: Mapping[str, object] | None) -> dict[str, object]:
+    """Parameter documents combined: ``top`` (the command line's) wins, scenario by scenario."""
+    merged: dict[str, object] = {name: dict(values) if isinstance(values, Mapping) else values
+                                 for name, values in base.items()}
+    for name, values in (top or {}).items():
+        current = merged.get(name)
+        if isinstance(current, dict) and isinstance(values, Mapping):
+            current.update(values)
+        else:
+            merged[name] = values
+    return merged

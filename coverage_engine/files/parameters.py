@@ -1,0 +1,108 @@
+"""Scenario parameter files: read their YAML documents, and write a template of all overridable parameters.
+
+Several documents in one file (``---``) mean several runs: the executor runs every scenario once per
+document. The template holds each scenario's overridable parameters with their current values in SI
+base units, structs as mappings and enums by name, so that reading it back changes nothing.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from coverage_engine.errors import ParameterFileError
+from coverage_engine.location import Location
+from coverage_engine.resolve.model import EnumValue, ScenarioFile
+
+
+def read_parameter_documents(path: str | Path) -> list[dict]:
+    """The documents of a parameter file, in order; an empty file is one empty document.
+
+    A key written twice in one mapping is an error at its second place (PyYAML alone keeps the last).
+    """
+    import yaml
+
+    class UniqueKeyLoader(yaml.SafeLoader):
+        def construct_mapping(self, node, deep=False):
+            if isinstance(node, yaml.MappingNode):
+                seen: dict = {}
+                for key_node, _ in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue
+                    key = self.construct_object(key_node, deep=True)
+                    try:
+                        first = seen.setdefault(key, key_node)
+                    except TypeError:  # an unhashable key: PyYAML reports it
+                        continue
+                    if first is not key_node:
+                        mark = key_node.start_mark
+                        lines = text.splitlines()
+                        raise ParameterFileError(
+                            f"duplicate key '{key}' (first at line {first.start_mark.line + 1})",
+                            Location(str(path), mark.line + 1, mark.column + 1),
+                            source_line=lines[mark.line] if mark.line < len(lines) else None)
+            return super().construct_mapping(node, deep=deep)
+
+    path = Path(path)
+    whole_file = Location(str(path), 0, 0)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParameterFileError("scenario parameter file not found", whole_file) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
+    try:
+        documents = list(yaml.load_all(text, Loader=UniqueKeyLoader))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = Location(str(path), mark.line + 1, mark.column + 1) if mark is not None else whole_file
+        problem = getattr(exc, "problem", None) or str(exc)
+        line = text.splitlines()[mark.line] if mark is not None and mark.line < len(text.splitlines()) else None
+        raise ParameterFileError(f"invalid YAML: {problem}", where, source_line=line) from exc
+    if not documents:
+        return [{}]
+    result: list[dict] = []
+    for index, doc in enumerate(documents):
+        if doc is None:
+            doc = {}
+        if not isinstance(doc, dict):
+            raise ParameterFileError(f"document {index + 1} must be a mapping of scenario names to "
+                                     f"parameters, got {type(doc).__name__}", whole_file)
+        result.append(doc)
+    return result
+
+
+def template_values(scenario_file: ScenarioFile) -> dict[str, dict[str, object]]:
+    """Scenario name → overridable parameter name → current value, as plain YAML data."""
+    return {s.name: {p.name: _plain(p.value) for p in s.parameters if p.overridable}
+            for s in scenario_file.scenarios}
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, EnumValue):
+        return value.name
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def write_parameter_template(scenario_path: str | Path, template_path: str | Path) -> None:
+    """Write the template for ``scenario_path`` to ``template_path``; never overwrites an existing file."""
+    import yaml
+
+    from coverage_engine.files.loader import load_scenario_file
+
+    target = Path(template_path)
+    if target.exists():
+        raise ParameterFileError("file exists; not overwriting it (remove it or choose another name)",
+                                 Location(str(target), 0, 0))
+    model = load_scenario_file(scenario_path)
+    text = yaml.safe_dump(template_values(model), sort_keys=False, default_flow_style=False, allow_unicode=True)
+    try:
+        with open(target, "x", encoding="utf-8") as handle:
+            handle.write(text)
+    except FileExistsError:
+        raise ParameterFileError("file exists; not overwriting it", Location(str(target), 0, 0)) from None
+    except OSError as exc:
+        raise ParameterFileError(f"cannot write template: {exc.strerror}", Location(str(target), 0, 0)) from exc

@@ -1,0 +1,351 @@
+"""The ``.sce`` format: one concrete variant of an ``.osc`` scenario, as small human-readable YAML.
+
+``scenario_variation`` writes one ``.sce`` per combination of varied values; ``scenario_execution``
+loads it exactly like the ``.osc`` it came from (see :mod:`coverage_engine.files.loader`). A file looks like::
+
+    # scenario_variation .sce, format 2: variant 1 of example.osc
+    # example_variation.log.msg = "bar"
+    format_version: 2
+    source: "example.osc"
+    source_sha256: "9f86d08…"
+    source_dir: ".."
+    scenario: "example_variation"
+    index: 1
+    assignment:
+      "example_variation.log.msg": "bar"
+    model: |2
+      import osc.helpers
+      scenario example_variation:
+      ...
+    # end of .sce
+
+Why this shape:
+
+* ``model`` is the concrete ``.osc`` text (each ``in [...]`` replaced by ``== value``), so imports such as
+  ``import osc.helpers`` stay import lines: libraries are referenced by name, never copied, and a
+  ``.sce`` stays a few hundred bytes.
+* ``source_dir`` is where relative imports and external Python modules are found. It is written
+  relative to the ``.sce``'s own folder when possible, so a checkout can move (or be mounted at another
+  path on a batch host) and its ``.sce`` files still load; :func:`read_sce` returns it absolute.
+* The model's lines are given back with as many blank lines in front as the block starts below the
+  top of the file, so an error in a ``.sce`` names the ``.sce`` line the user sees.
+* The last line, ``# end of .sce``, is what tells a complete file from one cut short (format 2; files
+  of format 1 have no such line and are still read). ``source_sha256`` is provenance only (which
+  ``.osc`` text the variant came from); loading never compares it: the model is in the file.
+* Everything written is deterministic (no time stamps): the SHA-256 of the text is the variant's
+  identity in the store, and regenerating the same input gives byte-identical files.
+
+Writing never goes through a YAML emitter: :class:`SceTemplate` fills a template of pre-quoted parts,
+which is what makes 100,000 variants a matter of seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from coverage_engine.errors import SceFormatError
+from coverage_engine.location import Location
+
+#: The format version this release writes.
+SCE_FORMAT_VERSION = 2
+#: The versions this release reads. Version 2 is version 1 plus the closing :data:`SCE_END` line.
+SCE_READABLE_VERSIONS = (1, 2)
+
+#: First line of every file we write (also how an earlier generation's files are recognised).
+SCE_MAGIC = "# scenario_variation .sce"
+#: Last line of every file of version 2: a file without it was cut short (disk full, killed copy).
+SCE_END = "# end of .sce"
+
+_DECLARED_VERSION = re.compile(re.escape(SCE_MAGIC) + r", format (\d+)")
+
+_REQUIRED = {
+    "format_version": int,
+    "source": str,
+    "source_sha256": str,
+    "source_dir": str,
+    "scenario": str,
+    "assignment": dict,
+    "model": str,
+}
+
+#: Characters a YAML literal block can carry unchanged (printable, tab; no CR, no BOM, no NEL/LS/PS).
+_BLOCK_UNSAFE = re.compile("[^\t\n\x20-\x7e\xa0-\ud7ff\ue000-\ufefe\uff00-\ufffd\U00010000-\U0010ffff]|[\x85]")
+
+
+@dataclass(frozen=True)
+class SceDocument:
+    """A loaded ``.sce`` file.
+
+    ``text`` is the concrete ``.osc`` text to parse (padded so its line numbers are those of the
+    ``.sce``); ``source_dir`` the absolute folder of the original ``.osc``; ``assignment`` maps each
+    varied parameter (``scenario.path``) to its value; ``parameters`` is the scenario parameter
+    document this variant was made with (``{scenario: {param: value}}``), or None.
+    """
+
+    text: str
+    source_dir: str
+    scenario: str
+    assignment: dict[str, object]
+    format_version: int
+    source: str
+    source_sha256: str
+    index: int | None = None
+    parameters: dict[str, object] | None = None
+    path: str = ""
+    extra: dict[str, object] = field(default_factory=dict)
+
+
+def _quote(value: object) -> str:
+    """A YAML flow scalar for ``value`` (JSON is valid YAML; non-ASCII kept readable)."""
+    return json.dumps(value, ensure_ascii=False)
+
+
+def _indent_chunk(chunk: str, first: bool, last: bool) -> str:
+    """Indent a piece of model text for the literal block (empty lines stay empty).
+
+    A chunk ends where a substituted value begins, so a line break at its very end still starts a
+    non-empty line; in the last chunk the final line break ends the block.
+    """
+    pattern = _LAST_BREAKS if last else _INNER_BREAKS
+    indented = pattern.sub("\n  ", chunk)
+    if first and not chunk.startswith("\n"):
+        indented = "  " + indented
+    return indented
+
+
+_INNER_BREAKS = re.compile(r"\n(?!\n)")
+_LAST_BREAKS = re.compile(r"\n(?![\n]|\Z)")
+
+
+class SceTemplate:
+    """Makes the ``.sce`` texts of all variants of one source file, fast.
+
+    The concrete model is ``chunks[0] + slot_0 + chunks[1] + … + chunks[-1]`` where slot ``i`` is
+    ``replacements[i][choice]``. Each dimension (the text ones first, in order, then the optional
+    parameter-document one) has per choice: a key, the value as shown in the header comment, and the
+    value stored in the assignment. Everything is quoted and indented once here; :meth:`render`
+    only joins strings, so 100,000 variants cost little more than writing them.
+    """
+
+    def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
+                 chunks: list[str], replacements: list[list[str]], keys: list[str],
+                 shown: list[list[str]], stored: list[list[object]],
+                 documents: Sequence[Mapping[str, object]] | None = None) -> None:
+        model = "".join(chunks)
+        self._block = _BLOCK_UNSAFE.search(model) is None and all(
+            _BLOCK_UNSAFE.search(r) is None and "\n" not in r for slot in replacements for r in slot)
+        last = len(chunks) - 1
+        if self._block:
+            self._chunks = [_indent_chunk(c, i == 0, i == last) for i, c in enumerate(chunks)]
+        else:
+            self._chunks = list(chunks)
+        self._replacements = replacements
+        self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
+        self._of = f" of {_one_line(Path(source).name)}\n"
+        self._head = (
+            f"format_version: {SCE_FORMAT_VERSION}\n"
+            f"source: {_quote(source)}\n"
+            f"source_sha256: {_quote(source_sha256)}\n"
+            f"source_dir: {_quote(source_dir)}\n"
+            f"scenario: {_quote(scenario)}\n"
+            "index: "
+        )
+        self._comments = [[f"# {key} = {_one_line(text)}\n" for text in texts] for key, texts in zip(keys, shown, strict=True)]
+        self._entries = [[f"  {_quote(key)}: {_quote(value)}\n" for value in values]
+                         for key, values in zip(keys, stored, strict=True)]
+        self._documents = None if documents is None else [f"parameters: {_quote(d)}\n" for d in documents]
+        self.text_dimensions = len(replacements)
+
+    def model_text(self, choices: tuple[int, ...] | list[int]) -> str:
+        """The concrete ``.osc`` text for ``choices`` (not indented)."""
+        if self._block:
+            raise RuntimeError("model_text() is for the variation template, not the indented one")
+        return _join(self._chunks, self._replacements, choices)
+
+    def render(self, index: int, choices: tuple[int, ...] | list[int]) -> str:
+        """The ``.sce`` text of variant ``index`` made of ``choices`` (one choice index per dimension)."""
+        parts = [self._magic, str(index), self._of]
+        for comments, choice in zip(self._comments, choices, strict=True):
+            parts.append(comments[choice])
+        parts += [self._head, str(index), "\n"]
+        if self._entries:
+            parts.append("assignment:\n")
+            for entries, choice in zip(self._entries, choices, strict=True):
+                parts.append(entries[choice])
+        else:
+            parts.append("assignment: {}\n")
+        if self._documents is not None:
+            parts.append(self._documents[choices[-1]])
+        model = _join(self._chunks, self._replacements, choices)
+        if self._block:
+            parts += ["model: |2\n", model, _END_LINE]
+        else:
+            parts += ["model: ", _quote(model.rstrip("\n") + "\n"), "\n", _END_LINE]
+        return "".join(parts)
+
+
+_END_LINE = SCE_END + "\n"
+
+
+def _join(chunks: list[str], replacements: list[list[str]], choices) -> str:
+    if not replacements:
+        return chunks[0]
+    parts = [chunks[0]]
+    for i, slot in enumerate(replacements):
+        parts.append(slot[choices[i]])
+        parts.append(chunks[i + 1])
+    return "".join(parts)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def relative_source_dir(source_dir: str | os.PathLike, output_dir: str | os.PathLike) -> str:
+    """``source_dir`` as written into a ``.sce`` in ``output_dir``: relative when possible, with ``/``."""
+    source_dir = os.path.abspath(source_dir)
+    try:
+        rel = os.path.relpath(source_dir, os.path.abspath(output_dir))
+    except ValueError:  # another drive on Windows
+        return Path(source_dir).as_posix()
+    return Path(rel).as_posix()
+
+
+def render_sce(source: str, source_sha256: str, source_dir: str, scenario: str, index: int,
+               assignment: Mapping[str, object], shown: Mapping[str, str], model_text: str,
+               parameters: Mapping[str, object] | None = None) -> str:
+    """One ``.sce`` text (for single files and tests; the generator uses :class:`SceTemplate`)."""
+    keys = list(assignment)
+    values = dict(assignment)
+    if parameters is not None:
+        keys.append("parameter_document")
+        values["parameter_document"] = 0
+    template = SceTemplate(
+        source=source, source_sha256=source_sha256, source_dir=source_dir, scenario=scenario,
+        chunks=[model_text.rstrip("\n") + "\n"], replacements=[], keys=keys,
+        shown=[[shown.get(k, str(values[k]))] for k in keys], stored=[[values[k]] for k in keys],
+        documents=None if parameters is None else [parameters])
+    return template.render(index, [0] * len(keys))
+
+
+def is_sce_text(head: str) -> bool:
+    """Whether a file starting with ``head`` was written by ``scenario_variation``."""
+    return head.startswith(SCE_MAGIC)
+
+
+def _load_yaml(text: str, path: str):
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    try:
+        return yaml.load(text, Loader=loader)  # noqa: S506 - a safe loader
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        location = Location(path, mark.line + 1, mark.column + 1) if mark is not None else None
+        raise SceFormatError(f"not a valid .sce file: {exc.problem or exc}", location) from exc
+    except yaml.YAMLError as exc:
+        raise SceFormatError(f"{path}: not a valid .sce file: {exc}") from exc
+
+
+def _model_first_line(text: str) -> int:
+    """1-based line of the ``.sce`` on which the model's first line stands (0 when not a block)."""
+    for number, line in enumerate(text.split("\n"), start=1):
+        if line.startswith("model:"):
+            return number + 1 if line.rstrip().startswith("model: |") else 0
+    return 0
+
+
+def _truncated(text: str, path: str) -> SceFormatError:
+    lines = text.rstrip("\n").count("\n") + 1
+    return SceFormatError(f"truncated .sce file: it ends at line {lines} without the closing '{SCE_END}' line "
+                          "(the file was cut short; generate it again with scenario_variation)",
+                          Location(path, lines, 1))
+
+
+def _is_complete(text: str) -> bool:
+    """Whether the text's last non-blank line is :data:`SCE_END` (model lines are indented or quoted)."""
+    return text.rstrip().rpartition("\n")[2] == SCE_END
+
+
+def _line_of_key(text: str, key: str) -> int:
+    for number, line in enumerate(text.split("\n"), start=1):
+        if line.startswith(key + ":"):
+            return number
+    return 1
+
+
+def _declared_scenarios(model: str) -> list[str]:
+    return re.findall(r"^scenario[ \t]+([A-Za-z_][\w.]*)", model, re.MULTILINE)
+
+
+def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
+    """Read the text of a ``.sce`` file; ``source_dir`` is made absolute against ``path``'s folder.
+
+    Raises :class:`~coverage_engine.errors.SceFormatError` for anything malformed, an unknown format
+    version, a version 2 file without its closing line (truncated), or a ``scenario`` the model does
+    not declare.
+    """
+    declared = _DECLARED_VERSION.match(text)
+    if declared is not None and int(declared.group(1)) >= 2 and not _is_complete(text):
+        raise _truncated(text, path)
+    data = _load_yaml(text, path)
+    where = Location(path, 1, 1)
+    if not isinstance(data, dict):
+        raise SceFormatError("not a .sce file: expected a YAML mapping with 'format_version' and 'model'", where)
+    version = data.get("format_version")
+    if version is None:
+        raise SceFormatError("not a .sce file: 'format_version' is missing", where)
+    if version not in SCE_READABLE_VERSIONS or isinstance(version, bool):
+        readable = " and ".join(str(v) for v in SCE_READABLE_VERSIONS)
+        raise SceFormatError(
+            f"unsupported .sce format version {version!r}; this release reads versions {readable} "
+            f"(regenerate the file with this release's scenario_variation)", where)
+    if version >= 2 and not _is_complete(text):
+        raise _truncated(text, path)
+    for key, kind in _REQUIRED.items():
+        if key not in data:
+            raise SceFormatError(f"malformed .sce file: '{key}' is missing", where)
+        if not isinstance(data[key], kind) or isinstance(data[key], bool):
+            raise SceFormatError(
+                f"malformed .sce file: '{key}' must be a {'mapping' if kind is dict else kind.__name__}", where)
+    parameters = data.get("parameters")
+    if parameters is not None and not isinstance(parameters, dict):
+        raise SceFormatError("malformed .sce file: 'parameters' must be a mapping", where)
+    index = data.get("index")
+    if index is not None and (not isinstance(index, int) or isinstance(index, bool)):
+        raise SceFormatError("malformed .sce file: 'index' must be an integer", where)
+    model = data["model"]
+    scenario = data["scenario"]
+    if scenario:
+        scenarios = _declared_scenarios(model)
+        if scenario not in scenarios:
+            known = ", ".join(scenarios) if scenarios else "none"
+            raise SceFormatError(f"malformed .sce file: scenario {scenario!r} is not declared in its model "
+                                 f"(scenarios there: {known})", Location(path, _line_of_key(text, "scenario"), 11))
+    first = _model_first_line(text)
+    padded = "\n" * (first - 1) + model if first > 0 else model
+    base = Path(path).parent if path and not path.startswith("<") else Path.cwd()
+    source_dir = str((base / data["source_dir"]).resolve()) if data["source_dir"] else str(base.resolve())
+    extra = {k: v for k, v in data.items() if k not in _REQUIRED and k not in ("parameters", "index")}
+    return SceDocument(
+        text=padded, source_dir=source_dir, scenario=scenario, assignment=dict(data["assignment"]),
+        format_version=version, source=data["source"], source_sha256=data["source_sha256"],
+        index=index, parameters=parameters, path=path, extra=extra)
+
+
+def read_sce(path: str | os.PathLike) -> SceDocument:
+    """Load a ``.sce`` file written by ``scenario_variation`` (see the module docstring for the format)."""
+    path = str(path)
+    try:
+        with open(path, encoding="utf-8") as handle:
+            text = handle.read()
+    except FileNotFoundError as exc:
+        raise SceFormatError(f"{path}: no such file") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceFormatError(f"{path}: cannot read .sce file: {exc}") from exc
+    return parse_sce(text, path)

@@ -1,0 +1,6 @@
+"""Parsing: ``.osc`` text → the syntax tree (frozen :mod:`~coverage_engine.parse.syntax` nodes, no meaning).
+
+Entry points: :func:`~coverage_engine.parse.parser.parse_text`, :func:`~coverage_engine.parse.parser.parse_file`
+and, for imported files, :func:`~coverage_engine.parse.parser.parse_file_cached`. This package's
+``__init__`` imports nothing, so each entry point costs only what it uses.
+"""

@@ -1,0 +1,112 @@
+"""The LALR driver: runs the tables of :mod:`~coverage_engine.parse.tables` over a token stream.
+
+On every reduction it calls the syntax builder's method of the rule's name, so no intermediate tree
+is built. A parse failure is a :class:`ParseFailure` carrying the parser state, which
+:mod:`coverage_engine.parse.syntax_errors` turns into our error.
+"""
+
+from __future__ import annotations
+
+from coverage_engine.parse.tables import tables
+
+
+class ParseFailure(Exception):
+    """Raised by the lexer or driver: ``token`` (or a bad character at ``pos``) in parser ``state``."""
+
+    def __init__(self, state: int, expected: set[str], token=None, pos: int = 0, line: int = 1,
+                 column: int = 1) -> None:
+        super().__init__("parse failure")
+        self.state, self.expected, self.token = state, expected, token
+        self.pos, self.line, self.column = pos, line, column
+
+
+class _EndToken:
+    """The end-of-input token, placed right after the last real token."""
+
+    type = "$END"
+
+    def __init__(self, last) -> None:
+        self.value = ""
+        self.line = getattr(last, "end_line", 1) or 1
+        self.column = getattr(last, "end_column", 1) or 1
+        self.start_pos = self.end_pos = getattr(last, "end_pos", 0) or 0
+        self.end_line, self.end_column = self.line, self.column
+
+    def __str__(self) -> str:
+        return ""
+
+
+class _Inline(list):
+    """Children of an inlined (``_name``) rule, spliced into the parent's children."""
+
+
+_bound_rules: dict[int, list] = {}
+
+
+def run(tokens, builder, state_box: list[int]) -> object:
+    """Drive the LALR table over ``tokens`` calling ``builder.<rule>(children)`` on each reduction.
+
+    ``state_box[0]`` always holds the current state, so the lexer can read which keywords the parser
+    accepts right now (soft keywords).
+    """
+    t = tables()
+    states = t.states
+    # per rule: callback (None for inlined rules), goto symbol, length, expand1, inline mask
+    rules = _bound_rules.get(id(builder))
+    if rules is None:
+        rules = _bound_rules[id(builder)] = [
+            (None if name[0] == "_" else getattr(builder, name, None), origin, size, expand1, inline)
+            for name, origin, size, expand1, inline in t.rules]
+    state_stack = [t.start_state]
+    value_stack: list[object] = []
+    state_box[0] = t.start_state
+    end_state = t.end_state
+    last = None
+    token = None
+    tokens = iter(tokens)
+    while True:
+        token = next(tokens, None)
+        if token is None:
+            kind = "$END"
+        else:
+            last = token
+            kind = token.type
+        while True:
+            state = state_stack[-1]
+            if state == end_state and token is None:
+                return value_stack[-1]
+            action = states[state].get(kind)
+            if action is None:
+                raise ParseFailure(state, set(states[state]), token if token is not None else _EndToken(last))
+            if action[0]:
+                if token is None:  # pragma: no cover - the grammar never shifts $END
+                    raise ParseFailure(state, set(states[state]), _EndToken(last))
+                state_stack.append(action[1])
+                value_stack.append(token)
+                state_box[0] = action[1]
+                break
+            callback, origin, size, expand1, inline = rules[action[1]]
+            if size:
+                children = value_stack[-size:]
+                del value_stack[-size:]
+                del state_stack[-size:]
+            else:
+                children = []
+            if inline is not None:
+                spliced: list[object] = []
+                for flag, child in zip(inline, children, strict=True):
+                    if flag and type(child) is _Inline:
+                        spliced.extend(child)
+                    else:
+                        spliced.append(child)
+                children = spliced
+            if expand1 and len(children) == 1:
+                value = children[0]
+            elif callback is None:
+                value = _Inline(children)  # an inlined rule (or a ?rule, which always has one child)
+            else:
+                value = callback(children)
+            goto = states[state_stack[-1]][origin][1]
+            state_stack.append(goto)
+            value_stack.append(value)
+            state_box[0] = goto

@@ -1,0 +1,292 @@
+"""Transformer rules for behaviours (``do`` members) and expressions, and the location helpers.
+
+Kept apart from :mod:`coverage_engine.parse.transformer` only for size. Expressions arrive as a flat run of
+operands and operator tokens; :meth:`BehaviorExpressionRules.expr` applies precedence by climbing.
+Unary minus written directly before a number literal is folded into it (``-2.0rad`` is one
+:class:`PhysicalLiteral` spanning the sign); any other unary minus stays a :class:`UnaryOp`.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import cast
+
+from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
+from coverage_engine.location import Location
+from coverage_engine.parse import syntax as s
+from coverage_engine.parse.lexer import Token
+from coverage_engine.parse.strings import unescape_string
+from coverage_engine.records import replace
+
+# Names the reference reserves for features we do not implement; written like a call they would
+# otherwise parse as an ordinary modifier/behaviour invocation or function call.
+UNSUPPORTED_STATEMENTS = {"cover": "cover()", "record": "record()", "remove_default": "remove_default()"}
+UNSUPPORTED_EXPR_CALLS = {
+    "sample": "sample()", "range": "range() (write [low..high] instead)",
+    "rise": "rise()", "fall": "fall()", "every": "every()",
+}
+BINARY_PRECEDENCE = {
+    "=>": 1, "or": 2, "and": 3,
+    "==": 5, "!=": 5, "<": 5, "<=": 5, ">": 5, ">=": 5, "in": 5,
+    "+": 6, "-": 6, "*": 7, "/": 7, "%": 7,
+}
+PREFIX_PRECEDENCE = {"not": 4, "-": 8, "+": 8}
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
+def _start(x):
+    """(line, column, offset) where ``x`` (token, node, or tuple of nodes) begins."""
+    if isinstance(x, Token):
+        return x.line, x.column, x.start_pos
+    if isinstance(x, (tuple, list)):
+        return _start(x[0])
+    loc = x.location if not isinstance(x, Location) else x
+    return loc.line, loc.column, loc.start_pos
+
+
+def _end(x):
+    """(line, column, offset) just after ``x``."""
+    if isinstance(x, Token):
+        return x.end_line, x.end_column, x.end_pos
+    if isinstance(x, (tuple, list)):
+        return _end(x[-1])
+    loc = x.location if not isinstance(x, Location) else x
+    return loc.end_line, loc.end_column, loc.end_pos
+
+
+class BehaviorExpressionRules:
+    """Rules for behaviours and expressions plus the helpers every rule uses."""
+
+    def __init__(self) -> None:
+        self.file = "<string>"
+        self.text = ""
+        self._lines: list[str] | None = None
+
+    def reset(self, file: str, text: str) -> None:
+        """Prepare for one parse of ``text`` named ``file``."""
+        self.file, self.text, self._lines = file, text, None
+
+    # ------------------------------------------------------------------ helpers
+
+    def loc(self, children) -> Location:
+        items = [c for c in children if c is not None and not (isinstance(c, tuple) and not c)]
+        if not items:
+            return Location(self.file, 1, 1, 1, 1, 0, 0)
+        line, column, start = _start(items[0])
+        end_line, end_column, end = _end(items[-1])
+        return Location(self.file, line, column, end_line, end_column, start, end)
+
+    def tloc(self, tok: Token) -> Location:
+        return Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
+                          tok.start_pos, tok.end_pos)
+
+    def span(self, first, last) -> Location:
+        line, column, start = _start(first)
+        end_line, end_column, end = _end(last)
+        return Location(self.file, line, column, end_line, end_column, start, end)
+
+    def source_line(self, line: int) -> str | None:
+        if self._lines is None:
+            self._lines = _LINE_BREAK.split(self.text)
+        return self._lines[line - 1] if 0 < line <= len(self._lines) else None
+
+    def unsupported(self, what: str, where) -> UnsupportedFeatureError:
+        loc = self.tloc(where) if isinstance(where, Token) else where
+        return UnsupportedFeatureError(f"not supported: {what}", loc, self.source_line(loc.line))
+
+    @staticmethod
+    def name(tok: Token) -> str:
+        value = str(tok)
+        if value[:1] == "|" and value[-1:] == "|" and len(value) > 1:
+            return value[1:-1]
+        return value
+
+    def check_call_name(self, name: s.QualifiedName) -> None:
+        if len(name.parts) == 1 and name.parts[0] in UNSUPPORTED_STATEMENTS:
+            raise self.unsupported(UNSUPPORTED_STATEMENTS[name.parts[0]], name.location)
+
+    # ------------------------------------------------------------------ behaviours
+
+    def labelled(self, children):
+        return replace(children[-1], label=self.name(children[0]), location=self.loc(children))
+
+    def composite(self, children):
+        arguments: tuple = ()
+        members, with_members = [], ()
+        for c in children[1:]:
+            if isinstance(c, Token):
+                continue
+            if isinstance(c, list):
+                arguments = tuple(c)
+            elif isinstance(c, tuple):
+                with_members = c
+            else:
+                members.append(c)
+        return s.Composite(str(children[0]), None, tuple(members), arguments, with_members, self.loc(children))
+
+    def composite_args(self, children):
+        return list(children[1]) if isinstance(children[1], tuple) else []
+
+    def invocation(self, children):
+        name = children[0]
+        self.check_call_name(name)
+        arguments = children[2] if isinstance(children[2], tuple) else ()
+        last = children[-1]
+        with_members = last if isinstance(last, tuple) and last is not arguments else ()
+        return s.Invocation(None, name, arguments, with_members, self.loc(children))
+
+    def wait(self, children):
+        return s.Wait(None, children[1], self.loc(children))
+
+    def wait_condition(self, children):
+        for c in children[1:]:
+            raise self.unsupported(c[0], c[1])
+        return children[0]
+
+    def event_as(self, children):
+        return ("event field declarations (as ...)", self.loc(children))
+
+    def event_if(self, children):
+        return ("event conditions (if ...)", self.loc(children))
+
+    def emit(self, children):
+        arguments = next((c for c in children if isinstance(c, tuple)), ())
+        return s.Emit(None, self.name(children[1]), arguments, self.loc(children))
+
+    def emit_args(self, children):
+        return children[1] if isinstance(children[1], tuple) else ()
+
+    def call(self, children):
+        expr = children[1]
+        if not isinstance(expr, s.Call):
+            loc = expr.location
+            raise OscSyntaxError("'call' needs a method call, e.g. call lib.method()", loc,
+                                 self.source_line(loc.line))
+        return s.CallDirective(None, expr, self.loc(children))
+
+    # ------------------------------------------------------------------ arguments
+
+    def arguments(self, children):
+        args = tuple(c for c in children if not isinstance(c, Token))
+        seen_named = False
+        for arg in args:
+            if arg.name is not None:
+                seen_named = True
+            elif seen_named:
+                raise OscSyntaxError("positional argument after a named argument", arg.location,
+                                     self.source_line(arg.location.line),
+                                     "write positional arguments first, then the named ones")
+        return args
+
+    def named_argument(self, children):
+        return s.Argument(self.name(children[0]), children[2], self.loc(children))
+
+    def positional_argument(self, children):
+        return s.Argument(None, children[0], self.loc(children))
+
+    # ------------------------------------------------------------------ expressions
+
+    def expr(self, children):
+        if len(children) == 1:
+            return children[0]
+        if len(children) >= 5 and isinstance(children[-4], Token) and children[-4].value == "?":
+            condition = self._climb(children[:-4])
+            return s.Ternary(condition, children[-3], children[-1], self.span(condition, children[-1]))
+        return self._climb(children)
+
+    def _climb(self, items):
+        if len(items) == 1:
+            return items[0]
+        node, pos = self._climb_from(items, 0, 0)
+        return node
+
+    def _climb_from(self, items, pos, min_prec):
+        first = items[pos]
+        if isinstance(first, Token):  # prefix operator
+            operand, pos = self._climb_from(items, pos + 1, PREFIX_PRECEDENCE[str(first)])
+            left = self._unary(first, operand)
+        else:
+            left, pos = first, pos + 1
+        while pos < len(items):
+            op = items[pos]
+            prec = BINARY_PRECEDENCE[str(op)]
+            if prec < min_prec:
+                break
+            right, pos = self._climb_from(items, pos + 1, prec + 1)
+            left = s.BinaryOp(str(op), left, right, self.span(left, right))
+        return left, pos
+
+    def _unary(self, op: Token, operand):
+        loc = self.span(op, operand)
+        adjacent = operand.location.start_pos == op.end_pos
+        if op.value == "+":
+            if adjacent and isinstance(operand, (s.Literal, s.PhysicalLiteral)):
+                return replace(operand, location=loc)
+            return operand
+        if op.value == "-" and adjacent:
+            if isinstance(operand, s.Literal) and operand.kind in ("int", "float"):
+                return s.Literal(operand.kind, -cast("int | float", operand.value), loc)
+            if isinstance(operand, s.PhysicalLiteral):
+                return s.PhysicalLiteral(-operand.number, operand.unit, loc)
+        return s.UnaryOp(str(op), operand, loc)
+
+    def paren(self, children):
+        return children[1]
+
+    def member(self, children):
+        target, name = children[0], children[2]
+        if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
+            return s.EventRef(target.path + (self.name(name),), self.loc(children))
+        return s.MemberAccess(target, self.name(name), self.loc(children))
+
+    def call_expr(self, children):
+        callee = children[0]
+        if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
+            what = "type casts" if callee.member == "as" else "type tests"
+            raise self.unsupported(f"{what} (.{callee.member}())", callee.location)
+        if isinstance(callee, s.Identifier) and callee.name in UNSUPPORTED_EXPR_CALLS:
+            raise self.unsupported(UNSUPPORTED_EXPR_CALLS[callee.name], callee.location)
+        arguments = children[2] if isinstance(children[2], tuple) else ()
+        return s.Call(callee, arguments, self.loc(children))
+
+    def element_access(self, children):
+        raise self.unsupported("element access (list[index])", self.loc(children))
+
+    def int_lit(self, children):
+        return s.Literal("int", int(str(children[0])), self.tloc(children[0]))
+
+    def hex_lit(self, children):
+        return s.Literal("int", int(str(children[0]), 16), self.tloc(children[0]))
+
+    def float_lit(self, children):
+        return s.Literal("float", float(str(children[0])), self.tloc(children[0]))
+
+    def string_lit(self, children):
+        return s.Literal("string", unescape_string(str(children[0])), self.tloc(children[0]))
+
+    def bool_lit(self, children):
+        return s.Literal("bool", children[0].type == "TRUE", self.tloc(children[0]))
+
+    def physical(self, children):
+        number, unit = children
+        value: int | float = float(str(number)) if number.type == "FLOAT" else int(str(number))
+        return s.PhysicalLiteral(value, self.name(unit), self.loc(children))
+
+    def identifier(self, children):
+        return s.Identifier(self.name(children[0]), self.tloc(children[0]))
+
+    def list_expr(self, children):
+        items = tuple(c for c in children if not isinstance(c, Token))
+        return s.ListExpr(items, self.loc(children))
+
+    def range_expr(self, children):
+        return s.RangeExpr(children[1], children[3], self.loc(children))
+
+    def enum_ref(self, children):
+        return s.EnumValueRef(self.name(children[0]), self.name(children[2]), self.loc(children))
+
+    def enum_ref_bare(self, children):
+        return s.EnumValueRef(None, self.name(children[1]), self.loc(children))
+
+    def event_ref(self, children):
+        return s.EventRef((self.name(children[1]),), self.loc(children))

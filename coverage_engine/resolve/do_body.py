@@ -1,0 +1,233 @@
+"""Resolve a ``do`` body into model behaviours: composites, action calls, waits, emits and modifiers.
+
+Modifiers written among a composite's members (``repeat()`` inside ``serial:``) or in a ``with:``
+block apply to that composite or invocation; several nest in the order written, the first outermost
+(``retry(3)`` above ``timeout(2s)`` retries the timed-out attempt).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import cast
+
+from coverage_engine.errors import (
+    ArgumentError,
+    NameLookupError,
+    OscTypeError,
+    ResolveError,
+    UnsupportedFeatureError,
+)
+from coverage_engine.parse import syntax
+from coverage_engine.resolve import model
+from coverage_engine.resolve.keeps import extract_keep
+from coverage_engine.resolve.operations import bind_arguments, coerce
+from coverage_engine.resolve.scope import Scope
+from coverage_engine.resolve.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
+from coverage_engine.resolve.values import resolve_expression
+
+
+def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:
+    """The model behaviour for one member of a ``do`` body."""
+    if isinstance(node, syntax.Composite):
+        return _composite(node, scope)
+    if isinstance(node, syntax.Invocation):
+        return _invocation(node, scope)
+    if isinstance(node, syntax.Wait):
+        return _wait(node, scope)
+    if isinstance(node, syntax.Emit):
+        return _emit(node, scope)
+    if isinstance(node, syntax.CallDirective):
+        call = resolve_expression(node.call, scope)
+        return model.CallMethod(node.label or "call", call.expr, node.location)
+    if isinstance(node, syntax.ModifierInvocation):
+        raise ResolveError(f"modifier '{node.name.dotted}' must stand inside a composite or a 'with:' block",
+                           node.location)
+    raise ResolveError(f"unexpected {type(node).__name__} in a 'do' body", getattr(node, "location", None))
+
+
+def modifier_type(name: syntax.QualifiedName, scope: Scope) -> CompoundType | None:
+    """The modifier declaration ``name`` refers to, if it names one."""
+    found = scope.ctx.namespace.types.get(name.dotted)
+    if isinstance(found, CompoundType) and found.kind == "modifier":
+        return found
+    return None
+
+
+def _composite(node: syntax.Composite, scope: Scope) -> model.Behavior:
+    if node.arguments:
+        raise UnsupportedFeatureError(f"not supported: arguments of '{node.kind}'", node.location)
+    children: list[model.Behavior] = []
+    modifiers: list[syntax.ModifierInvocation] = []
+    for member in node.members:
+        if isinstance(member, syntax.ModifierInvocation):
+            modifiers.append(member)
+        elif isinstance(member, syntax.Invocation) and not member.with_members and member.label is None \
+                and modifier_type(member.name, scope) is not None:
+            modifiers.append(syntax.ModifierInvocation(member.name, member.arguments, member.location))
+        else:
+            children.append(resolve_behavior(member, scope))
+    for extra in node.with_members:
+        if isinstance(extra, syntax.KeepConstraint):
+            raise ResolveError(f"'keep' cannot constrain a '{node.kind}'", extra.location)
+        modifiers.append(extra)
+    composite = model.Composite(node.kind, node.label or node.kind, tuple(children), node.location)
+    return apply_modifiers(composite, modifiers, scope)
+
+
+def apply_modifiers(behavior: model.Behavior, modifiers: list[syntax.ModifierInvocation],
+                    scope: Scope) -> model.Behavior:
+    """Wrap ``behavior`` in each modifier, the first written outermost."""
+    for invocation in reversed(modifiers):
+        mtype = modifier_type(invocation.name, scope)
+        if mtype is None:
+            raise NameLookupError(f"unknown modifier '{invocation.name.dotted}'", invocation.name.location)
+        what = f"modifier '{mtype.name}'"
+        bound = bind_arguments(list(mtype.fields), invocation.arguments, what, invocation.location)
+        arguments: list[tuple[str, object]] = []
+        for name, fdecl in mtype.fields.items():
+            if name in bound:
+                arg = bound[name]
+                value = coerce(resolve_expression(arg.value, scope, fdecl.type), fdecl.type, arg.location,
+                               f"{what}, argument '{name}'")
+            elif fdecl.default is not None:
+                value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
+                               fdecl.location, f"{what}, parameter '{name}'")
+            else:
+                raise ArgumentError(f"{what}: missing argument '{name}'", invocation.location)
+            if not value.is_const:
+                raise ResolveError(f"{what}: argument '{name}' must be known before the run", invocation.location)
+            arguments.append((name, value.value))
+        _check_modifier_arguments(mtype.name, dict(arguments), invocation)
+        behavior = model.Modified(mtype.name, tuple(arguments), behavior, invocation.location)
+    return behavior
+
+
+def _check_modifier_arguments(name: str, arguments: dict[str, object], invocation: syntax.ModifierInvocation) -> None:
+    """Reject argument values of the built-in modifiers that cannot mean anything (``repeat(-3)``)."""
+    count = arguments.get("count")
+    if name == "repeat" and isinstance(count, int) and count < -1:
+        raise ArgumentError(f"repeat({count}): the count is a number of runs, or -1 for no end", invocation.location)
+    if name == "retry" and isinstance(count, int) and count < 0:
+        raise ArgumentError(f"retry({count}): the count of permitted failures cannot be negative",
+                            invocation.location)
+    duration = arguments.get("duration")
+    if name == "timeout" and isinstance(duration, float) and not (0 < duration < math.inf):
+        raise ArgumentError(f"timeout({duration} s): the duration must be a positive time", invocation.location)
+
+
+def _find_action(node: syntax.Invocation, scope: Scope) -> tuple[CompoundType, model.Expr | None]:
+    parts = node.name.parts
+    types = scope.ctx.namespace.types
+    if len(parts) > 1:
+        instance = scope.lookup(parts[0])
+        if instance is not None and len(parts) == 2:
+            if not isinstance(instance.type, CompoundType) or instance.type.kind != "actor":
+                raise OscTypeError(f"'{parts[0]}' is not an actor, so it has no action '{parts[1]}'",
+                                   node.name.location)
+            for ancestor in instance.type.ancestry():
+                if parts[1] in ancestor.behaviors:
+                    return ancestor.behaviors[parts[1]], _named_actor(instance.expr, parts[0])
+            raise NameLookupError(f"actor '{instance.type.name}' has no action '{parts[1]}'", node.name.location)
+        if parts[0] not in types and instance is None:
+            raise NameLookupError(f"unknown actor '{parts[0]}'", node.name.location)
+    found = types.get(node.name.dotted)
+    if isinstance(found, CompoundType):
+        if found.kind == "action":
+            return found, None
+        if found.kind == "modifier":
+            raise ResolveError(f"modifier '{found.name}' cannot be used as a behaviour here", node.location)
+        if found.kind == "scenario":
+            raise UnsupportedFeatureError(f"not supported: invoking scenario '{found.name}'", node.location)
+    raise NameLookupError(f"unknown action '{node.name.dotted}'", node.name.location)
+
+
+def _named_actor(actor: model.Expr, name: str) -> model.Expr:
+    """The actor instance as an action receives it: its members plus ``name`` (the instance's name)."""
+    if isinstance(actor, model.Const) and isinstance(actor.value, dict):
+        return model.Const({**actor.value, "name": name})
+    if isinstance(actor, model.MakeStruct):
+        return model.MakeStruct(actor.type_name, (*actor.members, ("name", model.Const(name))))
+    return actor
+
+
+def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
+    action, actor = _find_action(node, scope)
+    what = f"action '{action.name}'"
+    bound = bind_arguments(list(action.fields), node.arguments, what, node.location)
+    keeps = {}
+    modifiers: list[syntax.ModifierInvocation] = []
+    for member in node.with_members:
+        if isinstance(member, syntax.ModifierInvocation):
+            modifiers.append(member)
+            continue
+        keep = extract_keep(member, scope)
+        if len(keep.path) != 1 or keep.path[0] not in action.fields:
+            if not keep.path:
+                raise ResolveError(f"{what}: 'keep(it == …)' needs a parameter ('keep(it.name == …)')",
+                                   member.location)
+            raise NameLookupError(f"{what} has no parameter '{'.'.join(keep.path)}'", member.location)
+        if keep.path[0] in bound or keep.path[0] in keeps:
+            raise ArgumentError(f"{what}: parameter '{keep.path[0]}' is given twice", member.location)
+        keeps[keep.path[0]] = keep
+    arguments: list[tuple[str, model.Expr]] = []
+    for name, fdecl in action.fields.items():
+        if name in bound:
+            arg = bound[name]
+            value = coerce(resolve_expression(arg.value, scope, fdecl.type), fdecl.type, arg.location,
+                           f"{what}, argument '{name}'", lenient_string=True)
+        elif name in keeps:
+            keep = keeps[name]
+            value = coerce(resolve_expression(keep.value, scope, fdecl.type), fdecl.type, keep.location,
+                           f"{what}, parameter '{name}'", lenient_string=True)
+        elif fdecl.default is not None:
+            value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
+                           fdecl.location, f"{what}, parameter '{name}'")
+        else:
+            raise ArgumentError(f"{what}: missing argument '{name}'", node.location)
+        arguments.append((name, value.expr))
+    plugin_names = tuple(t.name for t in action.ancestry())
+    call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
+                            node.location)
+    return apply_modifiers(call, modifiers, scope)
+
+
+def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
+    cond = node.condition
+    if isinstance(cond, syntax.Call) and isinstance(cond.callee, syntax.Identifier) \
+            and cond.callee.name == "elapsed" and scope.lookup("elapsed") is None:
+        bound = bind_arguments(["duration"], cond.arguments, "'elapsed(...)'", cond.location)
+        if "duration" not in bound:
+            raise ArgumentError("'elapsed(...)' needs a duration", cond.location)
+        arg = bound["duration"]
+        value = resolve_expression(arg.value, scope)
+        is_time = isinstance(value.type, PhysicalType) and value.type.name == "time"
+        # A number computed at run time (an external method's result) counts as seconds; a number
+        # written in the file needs its unit.
+        run_time_number = is_numeric(value.type) and not value.is_const
+        if not (is_time or run_time_number or value.type is ANY):
+            raise OscTypeError(f"'elapsed(...)' needs a time with its unit (e.g. 3s), got {value.type}",
+                               arg.location)
+        if value.is_const and not (0 <= cast(float, value.value) < math.inf):
+            raise ArgumentError(f"'elapsed(...)' needs a finite, non-negative time, got {value.value} s",
+                                arg.location)
+        return model.WaitElapsed(node.label or "wait", value.expr, node.location)
+    if isinstance(cond, syntax.EventRef):
+        key = ".".join(cond.path)
+        if key not in scope.events:
+            raise NameLookupError(f"unknown event '{key}'", cond.location)
+        return model.WaitEvent(node.label or "wait", scope.events[key], node.location)
+    value = resolve_expression(cond, scope)
+    if value.type is not BOOL:
+        raise OscTypeError(f"'wait' needs a condition (bool) or 'elapsed(...)', got {value.type}", cond.location)
+    return model.WaitCondition(node.label or "wait", value.expr, node.location)
+
+
+def _emit(node: syntax.Emit, scope: Scope) -> model.Behavior:
+    if node.arguments:
+        raise UnsupportedFeatureError("not supported: event arguments", node.location)
+    if node.event in ("end", "fail"):
+        return model.EmitEvent(node.label or f"emit {node.event}", node.event, node.location)
+    if node.event not in scope.events:
+        raise NameLookupError(f"unknown event '{node.event}'", node.location)
+    return model.EmitEvent(node.label or f"emit {node.event}", scope.events[node.event], node.location)
+

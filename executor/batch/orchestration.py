@@ -1,0 +1,220 @@
+"""What the command line calls: create or resume a batch, run it with local workers, write the report.
+
+The single-host run is nothing more than the shared queue: a batch in the store (an SQLite file by
+default), a :class:`Worker` scoped to it, and the merged report built from the store's results.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import signal
+import socket
+import sys
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from executor.batch.errors import BatchError, NothingToResume
+from executor.batch.inputs import Shard, check_command, discover, job_specs
+from executor.batch.junit_merge import merged_report
+from executor.batch.progress import Reporter
+from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
+from executor.junit import write_report
+from store.jobs import Batch, BatchOptions
+from store.queue import DEFAULT_LEASE, QueueStore
+from store.states import JobState
+from store.variant_lookup import variant_assignments
+
+REPORT_FILE = "test.xml"
+
+#: Exit codes of an interrupted run: 128 + the signal number, as shells report it.
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+#: How the report of an interrupted run names the interruption.
+INTERRUPTION_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
+
+
+@dataclass(frozen=True)
+class BatchRequest:
+    """A batch as asked for on the command line."""
+
+    input_dir: str | None
+    output_dir: str
+    command: tuple[str, ...]
+    options: BatchOptions
+    shard: Shard | None = None
+
+
+def output_folder(path: str) -> str:
+    """The absolute output folder (created with its parents), the key under which a batch is resumed."""
+    folder = Path(path).expanduser().resolve()
+    for place in (folder, *folder.parents):
+        if place.exists():
+            if not place.is_dir():
+                raise BatchError(f"cannot make the output folder {folder}: {place} is not a folder")
+            break
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BatchError(f"cannot make the output folder {folder}: {exc.strerror or exc}") from exc
+    return str(folder)
+
+
+def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local") -> Batch:
+    """Discover the scenario files, keep the shard's share, and enqueue one job per file."""
+    if request.input_dir is None:
+        raise BatchError("-i/--input-dir is required (except with --resume)")
+    files = discover(request.input_dir)
+    check_command(request.command, require_executable=mode == "local")
+    specs = job_specs(files, request.shard)
+    options = request.options
+    if request.shard is not None:
+        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
+    return store.create_batch(mode=mode, input_dir=str(Path(request.input_dir).resolve()),
+                              output_dir=request.output_dir, host=socket.gethostname(),
+                              command=request.command, options=options, specs=specs)
+
+
+#: The options stored with a batch (the fields of :class:`store.jobs.BatchOptions`) and their command-line
+#: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
+OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
+                "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
+                "grace": "--grace", "shard": "--shard"}
+
+
+def _shown(value: object) -> str:
+    if value is None:
+        return "none"
+    if isinstance(value, tuple):
+        return " ".join(shlex.quote(v) for v in value) if value else "none"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def option_differences(batch: Batch, request: BatchRequest, given: Iterable[str]) -> list[str]:
+    """``--flag X (the batch has Y)`` for each option in ``given`` (as typed) that differs from the stored batch."""
+    wanted = set(given)
+    options = request.options
+    if request.shard is not None:
+        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
+    out = []
+    if "input_dir" in wanted and request.input_dir is not None and \
+            str(Path(request.input_dir).resolve()) != batch.input_dir:
+        out.append(f"-i {request.input_dir} (the batch has {batch.input_dir})")
+    for name, flag in OPTION_FLAGS.items():
+        mine, stored = getattr(options, name), getattr(batch.options, name)
+        if name in wanted and mine != stored:
+            out.append(f"{flag} {_shown(mine)} (the batch has {_shown(stored)})")
+    return out
+
+
+def resume_batch(store: QueueStore, output_dir: str, command: Sequence[str],
+                 request: BatchRequest | None = None, given: Iterable[str] = ()) -> Batch:
+    """The latest batch for ``output_dir``, its cancelled jobs queued again.
+
+    The command and every option named in ``given`` (those typed on the command line) must match the
+    stored batch: a resumed batch runs all its jobs alike, so a difference is refused, not ignored.
+    """
+    batch = store.latest_batch(output_dir=output_dir)
+    if batch is None:
+        raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url} to resume")
+    if command and tuple(command) != batch.command:
+        raise BatchError(f"--resume: the batch was started with a different command: {' '.join(batch.command)}")
+    differences = option_differences(batch, request, given) if request is not None else []
+    if differences:
+        raise BatchError("--resume: the batch was started with other options; it keeps them, so leave these "
+                         "out or start a new batch without --resume: " + "; ".join(differences))
+    store.resume(batch.id)
+    return batch
+
+
+@contextmanager
+def interrupts_stop(worker: Worker) -> Iterator[list[int]]:
+    """While inside, SIGINT/SIGTERM stop the worker (a second SIGINT kills the children at once)."""
+    received: list[int] = []
+
+    def handler(signum, _frame):
+        worker.stop(force=bool(received) and signum == signal.SIGINT)
+        received.append(signum)
+
+    previous = {sig: signal.signal(sig, handler) for sig in EXIT_INTERRUPTED}
+    try:
+        yield received
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
+               total: int | None = None, done: int = 0) -> tuple[WorkerSummary, int | None]:
+    """Run a worker until it runs out of work or is interrupted; returns its summary and the signal."""
+    worker = Worker(store, settings, reporter)
+    reporter.begin(total, done)
+    try:
+        with interrupts_stop(worker) as received:
+            summary = worker.run()
+    finally:
+        reporter.end()
+    return summary, (received[0] if received else None)
+
+
+def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *,
+              lease: float = DEFAULT_LEASE) -> tuple[dict[JobState, int], int | None]:
+    """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report."""
+    counts = store.counts(batch.id)
+    total = sum(counts.values())
+    done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
+    settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
+                              echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd())
+    _summary, signum = run_worker(store, settings, reporter, total, done)
+    interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
+    counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
+    return counts, signum
+
+
+def check_report_path(path: str | os.PathLike[str]) -> None:
+    """Raise :class:`BatchError` when the report cannot go to ``path`` because a folder on its way is a file."""
+    target = Path(path).absolute()
+    if target.is_dir():
+        raise BatchError(f"cannot write the report: {target} is a folder")
+    for folder in target.parents:
+        if folder.exists():
+            if not folder.is_dir():
+                raise BatchError(f"cannot write the report: {folder} is not a folder")
+            return
+
+
+def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
+                       interrupted: str | None = None) -> dict[JobState, int]:
+    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts.
+
+    ``interrupted`` (``Ctrl-C``, ``SIGTERM``) says the batch was stopped: its unfinished jobs are in the
+    report too, as errors (stopped while running) or skipped (not started).
+    """
+    check_report_path(path)
+    assignments = variant_assignments(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
+    xml_text = merged_report(store.iter_results(batch.id), assignments, interrupted=interrupted)
+    try:
+        write_report(path, xml_text)
+    except OSError as exc:
+        raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
+    return store.counts(batch.id)
+
+
+def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
+    """0 only when every job of the batch passed; 128+signal when interrupted."""
+    if signum is not None:
+        return EXIT_INTERRUPTED.get(signum, 128 + int(signum))
+    total = sum(counts.values())
+    return 0 if total and counts[JobState.PASSED] == total else 1
+
+
+def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:
+    """One line saying how the batch fared."""
+    total = sum(counts.values())
+    parts = [f"{counts[s]} {s.value}" for s in JobState if counts[s]]
+    text = f"batch {batch.id}: {total} job(s): " + ", ".join(parts or ["none"])
+    if report:
+        text += f"; report {report}"
+    return text

@@ -1,0 +1,88 @@
+"""Which scenario runs go where: names, output directories and ``_output_dir`` overrides.
+
+A file with N scenarios and a parameter file with M YAML documents gives N × M runs, in document
+order then file order. Names get ``-<document index>`` only when there is more than one document.
+With ``--output-dir``, a single run writes into it directly; several runs each get a subdirectory
+named after the run. A document may place a scenario's results with ``_output_dir`` under the
+scenario's key: relative paths stay inside ``--output-dir`` (``..`` escaping it is an error),
+absolute paths are used as they are.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+
+from coverage_engine.errors import ParameterFileError
+from coverage_engine.resolve.model import Scenario, ScenarioFile
+
+OUTPUT_DIR_KEY = "_output_dir"
+
+
+class PlannedRun:
+    """One scenario run: the resolved scenario, its result name and its output directory."""
+
+    __slots__ = ("scenario", "name", "output_dir")
+
+    def __init__(self, scenario: Scenario, name: str, output_dir: str | None) -> None:
+        self.scenario = scenario
+        self.name = name
+        self.output_dir = output_dir
+
+    def __repr__(self) -> str:
+        return f"PlannedRun({self.name!r}, output_dir={self.output_dir!r})"
+
+
+def split_output_dirs(document: Mapping | None) -> tuple[dict | None, dict[str, str]]:
+    """Take ``_output_dir`` out of each scenario's mapping: ``(overrides for the resolver, dirs)``.
+
+    Raises :class:`ParameterFileError` when ``_output_dir`` is not a non-empty string or escapes
+    the output directory.
+    """
+    if document is None:
+        return None, {}
+    if not isinstance(document, Mapping):
+        return document, {}  # the resolver reports what is wrong with it
+    overrides: dict = {}
+    dirs: dict[str, str] = {}
+    for scenario_name, values in document.items():
+        if isinstance(values, Mapping) and OUTPUT_DIR_KEY in values:
+            values = dict(values)
+            target = values.pop(OUTPUT_DIR_KEY)
+            if not isinstance(target, str) or not target.strip():
+                raise ParameterFileError(
+                    f"'{scenario_name}.{OUTPUT_DIR_KEY}': expected a directory path (string), got {target!r}")
+            if not os.path.isabs(target):
+                normal = os.path.normpath(target)
+                if normal == os.pardir or normal.startswith(os.pardir + os.sep):
+                    raise ParameterFileError(
+                        f"'{scenario_name}.{OUTPUT_DIR_KEY}': '{target}' leaves the output directory; "
+                        "use a path inside it, or an absolute path")
+            dirs[str(scenario_name)] = target
+        overrides[scenario_name] = values
+    return overrides, dirs
+
+
+def plan_runs(loaded: Sequence[tuple[ScenarioFile, Mapping[str, str]]], output_root: str | None) -> list[PlannedRun]:
+    """The runs for each loaded document (its resolved file and its ``_output_dir`` values)."""
+    suffixed = len(loaded) > 1
+    count = sum(len(scenario_file.scenarios) for scenario_file, _ in loaded)
+    runs = []
+    for index, (scenario_file, dirs) in enumerate(loaded):
+        for scenario in scenario_file.scenarios:
+            name = f"{scenario.name}-{index}" if suffixed else scenario.name
+            runs.append(PlannedRun(scenario, name,
+                                   output_dir_for(output_root, dirs.get(scenario.name), name, count > 1)))
+    return runs
+
+
+def output_dir_for(root: str | None, override: str | None, name: str, several: bool) -> str | None:
+    """Absolute output directory of one run (None without ``--output-dir`` and no absolute override)."""
+    if override is not None and os.path.isabs(override):
+        return os.path.normpath(override)
+    if root is None:
+        return None
+    root = os.path.abspath(root)
+    if override is not None:
+        return os.path.normpath(os.path.join(root, override))
+    return os.path.join(root, name) if several else root

@@ -1,0 +1,23 @@
+"""The one terminal policy of every command: rich output (progress bars, tables, live views) or plain lines.
+
+Rich output only on a real terminal, without ``NO_COLOR`` (https://no-color.org) and with a capable
+``TERM``; everywhere else (pipes, files, CI logs) plain lines that a script can read. Files we write
+are always plain.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import TextIO
+
+
+def wants_rich(stream: TextIO | None = None) -> bool:
+    """Whether ``stream`` (default stdout) gets rich output."""
+    stream = stream or sys.stdout
+    if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
+        return False
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False

@@ -1,0 +1,259 @@
+"""The work behind ``scenario_variation``: plan, report, write the ``.sce`` files and record them in the store.
+
+The language side (dimensions, the plan that checks each value once, the ``.sce`` files) is
+:mod:`coverage_engine.variation`; this module runs it for one :class:`VariationRequest` and records
+every written file in the store (:mod:`store.variants`), so it stands where the other commands'
+orchestrators stand (``cli → executor → coverage_engine | store``).
+
+Order matters for "bad input loses nothing already written": the input is parsed and every value
+checked, and the store opened, *before* an earlier generation in the output folder is touched; it
+is removed only once the new generation is written and recorded completely. SIGINT and SIGTERM stop
+the generation before the next variant, after the batch under way is recorded and written, so
+every file on disk has its store row.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING
+
+from coverage_engine.errors import OscError
+from coverage_engine.location import Location
+from executor.variation import report
+from executor.variation.report import echo
+
+if TYPE_CHECKING:
+    from sqlalchemy import Engine
+
+    from coverage_engine.variation.output import Generated
+    from coverage_engine.variation.plan import Resolve, VariationPlan
+
+#: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
+DEFAULT_MAX_VARIANTS = 10_000_000
+#: Up to this many variants, each written file is named on the terminal.
+LIST_FILES_UP_TO = 16
+#: Skipped combinations listed one by one (after the per-value report) up to this many.
+LIST_SKIPPED_UP_TO = 10
+#: Exit code of a run stopped by SIGINT or SIGTERM (what shells report for Ctrl-C).
+EXIT_INTERRUPTED = 130
+#: Bytes of one ``.sce`` file, roughly, for the disk-space estimate of ``--max-variants``.
+SCE_FILE_BYTES = 700
+
+
+class VariationStoreError(Exception):
+    """The store cannot be opened or written while recording a variation run."""
+
+
+class TooManyVariants(OscError):
+    """more combinations than --max-variants allows"""
+
+
+@dataclass(frozen=True)
+class VariationRequest:
+    """One ``scenario_variation`` call: the file to vary and the command line's options."""
+
+    scenario: str
+    output_dir: str = "out"
+    parameter_file: str | None = None
+    list_only: bool = False
+    log_model: bool = False
+    debug: bool = False
+    store: str | None = None
+    max_variants: int = DEFAULT_MAX_VARIANTS
+
+    def recorded_options(self, source: Path) -> dict[str, object]:
+        """The options kept with the run in the store, under the command line's names."""
+        return {"output_dir": self.output_dir, "debug": self.debug, "log_model": self.log_model,
+                "list": self.list_only, "scenario_parameter_file": self.parameter_file,
+                "max_variants": self.max_variants, "source": str(source)}
+
+
+def run(request: VariationRequest) -> int:
+    """Generate (or list) the variants of ``request.scenario``; returns the exit code."""
+    from coverage_engine.variation.plan import build_plan, check_plan
+
+    with _terminate_like_interrupt():
+        documents = None
+        if request.parameter_file is not None:
+            from coverage_engine.files.parameters import read_parameter_documents
+
+            documents = read_parameter_documents(request.parameter_file)
+        plan = build_plan(Path(request.scenario), documents)
+        limit = request.max_variants or DEFAULT_MAX_VARIANTS
+        if plan.total > limit:
+            raise TooManyVariants(
+                f"{plan.total} combinations ({report.slot_sizes(plan)}) are more than --max-variants ({limit}); "
+                "nothing was written", Location(str(plan.path), 0, 0),
+                hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
+                     f"{plan.total} (one .sce file each, about {report.size_text(plan.total * SCE_FILE_BYTES)} "
+                     "on disk)")
+        check_plan(plan)
+        report.describe(plan)
+        report.report_rejections(plan)
+        if request.list_only:
+            return report.list_assignments(plan)
+        if plan.valid_count() == 0:
+            echo(f"error: none of the {plan.total} combinations resolves; nothing written", err=True)
+            return 1
+        return _write(plan, request, _open_store(request.store))
+
+
+def _open_store(url: str | None) -> Engine:
+    from store.database import StoreError, ensure_schema, open_engine, store_url
+    from store.variants import TABLES
+
+    try:
+        engine = open_engine(store_url(url))
+        ensure_schema(engine, TABLES)
+    except StoreError as exc:
+        raise VariationStoreError(str(exc)) from exc
+    return engine
+
+
+def _write(plan: VariationPlan, request: VariationRequest, engine: Engine) -> int:
+    from coverage_engine.variation.output import earlier_generation, generate, remove_files, source_sha256
+    from store.database import StoreError
+    from store.variants import VariantRecord, VariationRecorder
+
+    output_dir = Path(request.output_dir)
+    # Files of the new generation overwrite those of the same name in place (far cheaper than
+    # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
+    old = {p.name: p for p in earlier_generation(output_dir)}
+    if old:
+        echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
+    debug, verbose = request.debug, plan.total <= LIST_FILES_UP_TO
+    skipped = 0
+    kept = "files of the earlier generation were kept"
+    try:
+        recorder = VariationRecorder(
+            engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
+            source_text=plan.text, options=request.recorded_options(plan.path),
+            output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())
+    except StoreError as exc:
+        raise VariationStoreError(f"{exc} (nothing was written)") from exc
+    scenario = plan.scenario
+    log_model = _ModelLog(plan) if request.log_model else None
+
+    def record(batch: list[Generated]) -> None:
+        recorder.add([VariantRecord(index=item.index, scenario=scenario, assignment=item.assignment_json or "",
+                                    sce_text=item.sce_text or "", file_path=item.path, content_hash=item.content_hash)
+                      for item in batch])
+
+    def on_item(item: Generated) -> None:
+        nonlocal skipped
+        progress.advance()
+        if item.rejection is not None:
+            skipped += 1
+            if skipped <= LIST_SKIPPED_UP_TO or debug:
+                values = ", ".join(f"{k} = {v}" for k, v in plan.shown_assignment(item.choices).items())
+                echo(f"skipped variant {item.index}: {values}", err=True)
+            return
+        path = item.path or ""
+        old.pop(os.path.basename(path), None)
+        if verbose or debug:
+            echo(f"wrote {os.path.relpath(path)}")
+        if log_model is not None:
+            log_model.show(item)
+
+    progress = report.Progress(plan.total)
+    try:
+        with _StopRequest() as stop:
+            result = generate(plan, output_dir, existing=frozenset(old), record=record, on_item=on_item,
+                              stop=stop)
+            recorder.finish(complete=not result.stopped)
+    except StoreError as exc:
+        raise VariationStoreError(f"{exc} (the .sce files written so far are in {output_dir}/ and recorded; "
+                                  f"{kept})") from exc
+    finally:
+        progress.close()
+    if result.stopped:
+        name = signal.Signals(stop.signal).name if stop.signal else "a stop request"
+        echo(f"interrupted ({name}): wrote {result.written} of {plan.valid_count()} scenario file(s) to "
+             f"{output_dir}/, all {result.written} recorded in the store"
+             + (f"; {kept}" if old else ""), err=True)
+        return EXIT_INTERRUPTED
+    # Only a generation that was written and recorded completely replaces the earlier one.
+    remove_files(list(old.values()))
+    if skipped > LIST_SKIPPED_UP_TO and not debug:
+        echo(f"... {skipped - LIST_SKIPPED_UP_TO} more skipped variants (-d lists all)", err=True)
+    summary = f"wrote {result.written} scenario file(s) to {output_dir}/"
+    if skipped:
+        summary += f"; {skipped} combination(s) skipped because they do not resolve"
+    echo(summary)
+    return 1 if skipped else 0
+
+
+class _ModelLog:
+    """``-l``: resolve each written variant on its own and print its model (slow path, one resolution each)."""
+
+    def __init__(self, plan: VariationPlan) -> None:
+        from coverage_engine.variation.plan import default_resolver
+
+        self.plan = plan
+        self.resolver: Resolve = default_resolver(plan.path)
+
+    def show(self, item: Generated) -> None:
+        from coverage_engine.resolve.printer import format_model
+
+        plan = self.plan
+        try:
+            model = self.resolver(plan.concrete_text(item.choices), plan.overrides(item.choices))
+        except OscError as exc:
+            echo(f"variant {item.index}: {exc.render()}", err=True)
+            return
+        echo(f"--- variant {item.index} ({os.path.relpath(item.path or '')})")
+        echo(format_model(model))
+
+
+class _StopRequest:
+    """While active, SIGINT and SIGTERM only ask the generation to stop before the next variant.
+
+    The batch under way is then recorded and written, so every file on disk has its store row.
+    """
+
+    def __init__(self) -> None:
+        self.signal: int | None = None
+        self._saved: dict[int, object] = {}
+
+    def __call__(self) -> bool:
+        return self.signal is not None
+
+    def _handle(self, signum: int, _frame: FrameType | None) -> None:
+        self.signal = signum
+
+    def __enter__(self) -> _StopRequest:
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self._saved[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        for signum, handler in self._saved.items():
+            signal.signal(signum, handler)  # type: ignore[arg-type]
+
+
+@contextmanager
+def _terminate_like_interrupt() -> Iterator[None]:
+    """While inside, SIGTERM stops the command like Ctrl-C does (exit 130, no traceback).
+
+    While files are written, :class:`_StopRequest` takes both signals over to stop cleanly.
+    """
+    def interrupt(_signum: int, _frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

@@ -19,8 +19,22 @@ import os
 import sys
 from collections.abc import Iterator
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 from executor.actions.base import ActionError
+
+if TYPE_CHECKING:
+    from typing import Any, TypeAlias
+
+    import numpy as np
+    from numpy.typing import NDArray
+
+    # The arrays of the navigation core, for annotations only: numpy's own type information checks
+    # what is done with them, while numpy itself is imported when an action first needs it.
+    BoolArray: TypeAlias = NDArray[np.bool_]
+    FloatArray: TypeAlias = NDArray[np.float64]
+    IntArray: TypeAlias = NDArray[np.integer[Any]]
+    RandomGenerator: TypeAlias = np.random.Generator
 
 
 class EngineMissingError(ActionError):
@@ -37,7 +51,12 @@ _EXTRAS = {
 
 
 def require(module: str) -> ModuleType:
-    """Import ``module`` (an engine), or raise :class:`EngineMissingError` naming its extra."""
+    """Import ``module`` (an engine), or raise :class:`EngineMissingError` naming its extra.
+
+    The engines ship no type information (numpy does, see the array types above), so their
+    functions and constants are untyped (``Any``) to the type checker: the classes that wrap them
+    (:class:`~executor.simulations.pybullet.world.World`) give the rest of the code typed methods.
+    """
     try:
         with native_output_silenced():
             return importlib.import_module(module)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import py_trees
 
 from executor.actions.base import ActionError
-from executor.simulations.gazebo.models import choose
+from executor.simulations.gazebo.models import UrdfModel, choose
 from executor.simulations.pybullet.access import WorldAction
 from executor.simulations.pybullet.navigation import NavigationWorld
 from executor.simulations.pybullet.world import scenario_folders
@@ -20,10 +22,11 @@ def spawn(action: WorldAction, name: str, model: str, x: float, y: float, z: flo
     NavigationWorld.of(action.lease)  # the ground and the map come first
     world = action.world
     choice = choose(model, scenario_folders(action.lease.input_dir), world.data_path)
-    if choice.path is not None:
+    if isinstance(choice, UrdfModel):
         world.load_urdf(name, choice.path, (x, y, z), (0.0, 0.0, yaw))
     else:
-        half = tuple(v / 2 for v in choice.size)
+        size_x, size_y, size_z = choice.size
+        half = (size_x / 2, size_y / 2, size_z / 2)
         world.add_box(name, half, (x, y, max(z, half[2])), yaw, mass=0.0 if choice.static else 1.0, model=model)
     action.logger.info(f"spawned '{name}' at ({x:.2f}, {y:.2f}): {choice.note}")
 
@@ -31,12 +34,12 @@ def spawn(action: WorldAction, name: str, model: str, x: float, y: float, z: flo
 class SpawnEntity(WorldAction):
     """``actor.spawn(spawn_pose, model, ...)``: the entity is named after the actor."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
-        self.pose: dict = {}
+        self.pose: dict[str, Any] = {}
         self.model = ""
 
-    def execute(self, spawn_pose: dict, model: str, world_name: str = "default", xacro_arguments: str = "") -> None:
+    def execute(self, spawn_pose: dict[str, Any], model: str, world_name: str = "default", xacro_arguments: str = "") -> None:
         self.pose, self.model = spawn_pose, model
 
     def update(self) -> Status:
@@ -49,7 +52,7 @@ class SpawnEntity(WorldAction):
 class RelativeSpawn(WorldAction):
     """``actor.relative_spawn(frame_id, parent_frame_id, distance, model, ...)``: ``distance`` ahead of a robot."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.frame_id = "base_link"
         self.distance = 0.0
@@ -76,7 +79,7 @@ class RelativeSpawn(WorldAction):
 class DeleteEntity(WorldAction):
     """``actor.delete(entity_name)``."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.entity = ""
 

@@ -9,24 +9,38 @@ an SDF (or URDF) file gives the stand-in box's size; without one, a :data:`DEFAU
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeAlias
 
 from defusedxml import ElementTree
 from defusedxml.common import DefusedXmlException
 
-DEFAULT_SIZE = (0.5, 0.5, 0.5)
+Size = tuple[float, float, float]
+DEFAULT_SIZE: Size = (0.5, 0.5, 0.5)
 MAX_MODEL_BYTES = 4 * 1024 * 1024
 
 
 @dataclass
-class ModelChoice:
-    """How a model reference is spawned: a URDF ``path``, or a box of ``size`` (and why)."""
+class UrdfModel:
+    """A model spawned from its URDF file as it is; ``note`` says which file."""
 
-    path: Path | None
-    size: tuple[float, float, float] | None
+    path: Path
+    note: str
+
+
+@dataclass
+class BoxModel:
+    """A box of ``size`` (metres, full lengths) standing in for a model; ``note`` says why."""
+
+    size: Size
     static: bool
     note: str
+
+
+#: how a model reference is spawned
+ModelChoice: TypeAlias = UrdfModel | BoxModel
 
 
 def reference_path(model: str) -> str:
@@ -36,7 +50,8 @@ def reference_path(model: str) -> str:
     return model
 
 
-def locate(model: str, folders: list[str | None], data_path: str) -> Path | None:
+def locate(model: str, folders: Iterable[str | None], data_path: str) -> Path | None:
+    """The file a model reference names: absolute, else in a scenario folder or its parent, else in pybullet_data."""
     relative = reference_path(model)
     candidate = Path(relative)
     if candidate.is_absolute():
@@ -52,23 +67,23 @@ def locate(model: str, folders: list[str | None], data_path: str) -> Path | None
     return None
 
 
-def choose(model: str, folders: list[str | None], data_path: str) -> ModelChoice:
+def choose(model: str, folders: Iterable[str | None], data_path: str) -> ModelChoice:
     """Decide how to spawn ``model``; see the module docstring."""
     path = locate(model, folders, data_path)
     if path is None:
-        return ModelChoice(None, DEFAULT_SIZE, True, f"model '{model}' not found: a {_size_text(DEFAULT_SIZE)} box "
-                           "stands in for it")
+        return BoxModel(DEFAULT_SIZE, True, f"model '{model}' not found: a {_size_text(DEFAULT_SIZE)} box "
+                        "stands in for it")
     if path.suffix == ".urdf":
-        return ModelChoice(path, None, False, f"model '{model}': {path}")
+        return UrdfModel(path, f"model '{model}': {path}")
     size, static = _box_of(path)
     if size is None:
-        return ModelChoice(None, DEFAULT_SIZE, static, f"model '{model}' ({path.name}) has no box geometry PyBullet "
-                           f"can use here: a {_size_text(DEFAULT_SIZE)} box stands in for it")
-    return ModelChoice(None, size, static, f"model '{model}': a {_size_text(size)} box "
-                       f"(its {path.suffix.lstrip('.').upper()} box geometry)")
+        return BoxModel(DEFAULT_SIZE, static, f"model '{model}' ({path.name}) has no box geometry PyBullet "
+                        f"can use here: a {_size_text(DEFAULT_SIZE)} box stands in for it")
+    return BoxModel(size, static, f"model '{model}': a {_size_text(size)} box "
+                    f"(its {path.suffix.lstrip('.').upper()} box geometry)")
 
 
-def _box_of(path: Path) -> tuple[tuple[float, float, float] | None, bool]:
+def _box_of(path: Path) -> tuple[Size | None, bool]:
     """The size of the first box in an SDF/URDF file, and whether the model is static."""
     try:
         if path.stat().st_size > MAX_MODEL_BYTES:
@@ -78,16 +93,17 @@ def _box_of(path: Path) -> tuple[tuple[float, float, float] | None, bool]:
         return None, True
     static = (root.findtext(".//static") or "true").strip().lower() in ("true", "1")
     for box in root.iter("box"):
-        text = box.findtext("size") or box.get("size")
-        if text:
-            try:
-                values = tuple(float(v) for v in text.split())
-            except ValueError:
-                continue
-            if len(values) == 3 and all(v > 0 for v in values):
-                return values, static
+        parts = (box.findtext("size") or box.get("size") or "").split()
+        if len(parts) != 3:
+            continue
+        try:
+            x, y, z = (float(v) for v in parts)
+        except ValueError:
+            continue
+        if x > 0 and y > 0 and z > 0:
+            return (x, y, z), static
     return None, static
 
 
-def _size_text(size: tuple[float, float, float]) -> str:
+def _size_text(size: Size) -> str:
     return "x".join(f"{v:g}" for v in size) + " m"

@@ -21,12 +21,16 @@ incrementally: marking or clearing a cell adds or removes a disk stamp in a coun
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from executor.simulations import engines
 from executor.simulations.navigation.maps import OccupancyMap
 
+if TYPE_CHECKING:
+    from executor.simulations.engines import BoolArray, FloatArray, IntArray
 
-def grow_distance(occupied, max_cells: int):
+
+def grow_distance(occupied: BoolArray, max_cells: int) -> IntArray:
     """Distance in cells from each cell to the nearest occupied one (``max_cells + 1`` beyond)."""
     np = engines.numpy()
     distance = np.full(occupied.shape, max_cells + 1, dtype=np.int16)
@@ -48,7 +52,8 @@ def grow_distance(occupied, max_cells: int):
     return distance
 
 
-def _disk(radius_cells: int):
+def _disk(radius_cells: int) -> IntArray:
+    """1 in the cells within ``radius_cells`` of the centre cell, 0 elsewhere (a square of side 2r+1)."""
     np = engines.numpy()
     r = radius_cells
     rows, cols = np.mgrid[-r:r + 1, -r:r + 1]
@@ -69,19 +74,19 @@ class Costmap:
         self.lethal_cells = max(1, math.ceil(robot_radius / res))
         self.inflation_cells = max(self.lethal_cells, math.ceil(inflation_radius / res))
         shape = grid_map.shape
-        static = grid_map.occupied if use_static else np.zeros(shape, dtype=bool)
+        static: BoolArray = grid_map.occupied if use_static else np.zeros(shape, dtype=bool)
         self.static_occupied = static
         static_distance = grow_distance(static, self.inflation_cells)
         self.static_lethal = static_distance <= self.lethal_cells
         self.static_penalty = self._penalty(static_distance)
-        self.obstacles = np.zeros(shape, dtype=bool)
-        self._lethal_count = np.zeros(shape, dtype=np.int16)
-        self._near_count = np.zeros(shape, dtype=np.int16)
+        self.obstacles: BoolArray = np.zeros(shape, dtype=bool)
+        self._lethal_count: IntArray = np.zeros(shape, dtype=np.int16)
+        self._near_count: IntArray = np.zeros(shape, dtype=np.int16)
         self._lethal_disk = _disk(self.lethal_cells)
         self._near_disk = _disk(self.inflation_cells)
         self.version = 0  # bumped on every change, so users can cache derived grids
 
-    def _penalty(self, distance):
+    def _penalty(self, distance: IntArray) -> FloatArray:
         """Cost added for being ``distance`` cells from an obstacle: high close by, 0 at the inflation radius."""
         np = engines.numpy()
         span = max(1, self.inflation_cells - self.lethal_cells)
@@ -90,7 +95,8 @@ class Costmap:
 
     # -- the laser's obstacles -------------------------------------------------------------------
 
-    def update(self, x: float, y: float, yaw: float, angles, ranges, range_min: float) -> None:
+    def update(self, x: float, y: float, yaw: float, angles: FloatArray, ranges: FloatArray,
+               range_min: float) -> None:
         """Mark where beams end (within obstacle_max_range) and clear the cells they passed."""
         np = engines.numpy()
         valid = np.isfinite(ranges) & (ranges >= range_min)
@@ -151,11 +157,11 @@ class Costmap:
 
     # -- what the planner and the follower read ---------------------------------------------------
 
-    def lethal(self):
+    def lethal(self) -> BoolArray:
         """Cells the robot's centre must not enter."""
         return self.static_lethal | (self._lethal_count > 0)
 
-    def penalty(self):
+    def penalty(self) -> FloatArray:
         """Extra cost per cell for being near an obstacle."""
         return self.static_penalty + (self._near_count > 0) * 1.0
 

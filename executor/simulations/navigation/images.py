@@ -11,8 +11,12 @@ from __future__ import annotations
 import struct
 import zlib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from executor.simulations import engines
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import IntArray
 
 MAX_PIXELS = 16_000_000
 MAX_FILE_BYTES = 64 * 1024 * 1024
@@ -22,7 +26,7 @@ class ImageError(ValueError):
     """The file is not an image we can read (the message says why)."""
 
 
-def read_grey_image(path: Path):
+def read_grey_image(path: Path) -> IntArray:
     """The image at ``path`` as a 2-D ``uint8`` array (rows top to bottom)."""
     if path.stat().st_size > MAX_FILE_BYTES:
         raise ImageError(f"{path}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB")
@@ -39,7 +43,7 @@ def _check_size(width: int, height: int, path: Path) -> None:
         raise ImageError(f"{path}: image size {width}x{height} is empty or above {MAX_PIXELS} pixels")
 
 
-def _read_pgm(data: bytes, path: Path):
+def _read_pgm(data: bytes, path: Path) -> IntArray:
     np = engines.numpy()
     fields: list[bytes] = []
     position = 2
@@ -82,10 +86,11 @@ def _read_pgm(data: bytes, path: Path):
 _CHANNELS = {0: 1, 4: 2, 2: 3, 6: 4}  # PNG colour type -> samples per pixel
 
 
-def _read_png(data: bytes, path: Path):
+def _read_png(data: bytes, path: Path) -> IntArray:
     np = engines.numpy()
-    position, idat = 8, []
-    header = None
+    position = 8
+    idat: list[bytes] = []
+    header: tuple[int, ...] | None = None
     while position + 8 <= len(data):
         length, kind = struct.unpack(">I4s", data[position:position + 8])
         body = data[position + 8:position + 8 + length]
@@ -118,7 +123,7 @@ def _read_png(data: bytes, path: Path):
     return np.rint(colour_part.mean(axis=2)).astype(np.uint8)
 
 
-def _unfilter(kind: int, line, previous, bpp: int, path: Path):
+def _unfilter(kind: int, line: IntArray, previous: IntArray, bpp: int, path: Path) -> IntArray:
     """Undo one PNG scanline filter (None, Sub, Up, Average, Paeth)."""
     if kind == 0:
         return line

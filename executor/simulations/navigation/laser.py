@@ -14,25 +14,32 @@ gives the same scans on every run.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 from executor.simulations import engines
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import FloatArray, RandomGenerator
+
+#: ``(starts, ends) -> hit fraction of each ray`` (0..1, 1.0 without a hit), in world coordinates
+RayCast = Callable[[Sequence[Sequence[float]], Sequence[Sequence[float]]], list[float]]
 
 
 class Laser:
     """Ray-cast ranges around a pose; ``cast(x, y, yaw)`` returns the ranges of all beams."""
 
-    def __init__(self, ray_cast: Callable[[list, list], list[float]], beams: int = 180, range_min: float = 0.15,
+    def __init__(self, ray_cast: RayCast, beams: int = 180, range_min: float = 0.15,
                  range_max: float = 12.0, height: float = 0.2) -> None:
         np = engines.numpy()
         self._ray_cast = ray_cast
         self.range_min = range_min
         self.range_max = range_max
         self.height = height
-        self.angles = np.linspace(-math.pi, math.pi, beams, endpoint=False)
+        self.angles: FloatArray = np.linspace(-math.pi, math.pi, beams, endpoint=False)
         self._cos, self._sin = np.cos(self.angles), np.sin(self.angles)
 
-    def cast(self, x: float, y: float, yaw: float):
+    def cast(self, x: float, y: float, yaw: float) -> FloatArray:
         """The true ranges (no noise) of every beam from pose ``(x, y, yaw)``."""
         np = engines.numpy()
         c, s = math.cos(yaw), math.sin(yaw)
@@ -56,9 +63,9 @@ class ScanModification:
     def __init__(self, seed: int) -> None:
         self.random_drop_percentage = 0.0
         self.gaussian_noise_std_deviation = 0.0
-        self._rng = engines.numpy().random.default_rng(seed)
+        self._rng: RandomGenerator = engines.numpy().random.default_rng(seed)
 
-    def apply(self, ranges):
+    def apply(self, ranges: FloatArray) -> FloatArray:
         """A modified copy of ``ranges``."""
         np = engines.numpy()
         out = np.array(ranges, dtype=np.float64)

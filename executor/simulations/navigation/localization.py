@@ -13,10 +13,14 @@ scan the weights are less informative and the estimate wanders, as AMCL's does.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Protocol
 
 from executor.simulations import engines
 from executor.simulations.navigation.costmap import grow_distance
 from executor.simulations.navigation.maps import OccupancyMap
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import FloatArray, RandomGenerator
 
 
 def wrap(angle: float) -> float:
@@ -32,16 +36,27 @@ def compose(pose: tuple[float, float, float], delta: tuple[float, float, float])
     return x + c * dx - s * dy, y + s * dx + c * dy, wrap(yaw + dyaw)
 
 
+class Localizer(Protocol):
+    """What the navigation stack needs of a localisation: a pose, odometry in, scans in."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]: ...
+
+    def predict(self, delta: tuple[float, float, float]) -> None: ...
+
+    def correct(self, angles: FloatArray, ranges: FloatArray, range_max: float) -> None: ...
+
+
 class DeadReckoning:
     """The initial pose moved by odometry; scans are not used."""
 
     def __init__(self, initial: tuple[float, float, float]) -> None:
-        self.pose = initial
+        self.pose: tuple[float, float, float] = initial
 
     def predict(self, delta: tuple[float, float, float]) -> None:
         self.pose = compose(self.pose, delta)
 
-    def correct(self, angles, ranges, range_max: float) -> None:
+    def correct(self, angles: FloatArray, ranges: FloatArray, range_max: float) -> None:
         """Nothing to correct against."""
 
 
@@ -54,7 +69,7 @@ class ParticleFilter:
                  update_min_d: float = 0.1, update_min_a: float = 0.1) -> None:
         np = engines.numpy()
         self.map = grid_map
-        self.rng = np.random.default_rng(seed)
+        self.rng: RandomGenerator = np.random.default_rng(seed)
         self.count = particles
         self.max_beams = max_beams
         self.sigma_hit, self.z_hit, self.z_rand = sigma_hit, z_hit, z_rand
@@ -65,15 +80,15 @@ class ParticleFilter:
         self._field_resolution = grid_map.resolution / self._scale
         occupied = np.kron(grid_map.occupied, np.ones((self._scale, self._scale), dtype=bool))
         max_cells = int(math.ceil(1.0 / self._field_resolution))
-        self._distance = grow_distance(occupied, max_cells).astype(np.float64) * self._field_resolution
+        self._distance: FloatArray = grow_distance(occupied, max_cells).astype(np.float64) * self._field_resolution
         self._max_distance = (max_cells + 1) * self._field_resolution
         x, y, yaw = initial
-        self.particles = np.column_stack((self.rng.normal(x, 0.1, particles), self.rng.normal(y, 0.1, particles),
+        self.particles: FloatArray = np.column_stack((self.rng.normal(x, 0.1, particles), self.rng.normal(y, 0.1, particles),
                                           self.rng.normal(yaw, 0.05, particles)))
-        self.weights = np.full(particles, 1.0 / particles)
+        self.weights: FloatArray = np.full(particles, 1.0 / particles)
         self._moved_d = 0.0
         self._moved_a = 0.0
-        self.pose = initial
+        self.pose: tuple[float, float, float] = initial
 
     def predict(self, delta: tuple[float, float, float]) -> None:
         """Move every particle by the odometry increment plus noise.
@@ -104,7 +119,7 @@ class ParticleFilter:
         self._moved_a += abs(turn)
         self._estimate()
 
-    def correct(self, angles, ranges, range_max: float) -> None:
+    def correct(self, angles: FloatArray, ranges: FloatArray, range_max: float) -> None:
         """Weight the particles by the scan (once the robot has moved enough) and resample."""
         if self._moved_d < self.update_min_d and self._moved_a < self.update_min_a:
             return

@@ -11,13 +11,18 @@ row), so ``row = (y - origin_y) / resolution`` like ``col = (x - origin_x) / res
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import yaml
 
 from executor.simulations import engines
 from executor.simulations.navigation.images import ImageError, read_grey_image
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import BoolArray
 
 MAP_FILE = "map.yaml"
 MAX_MAP_YAML_BYTES = 64 * 1024
@@ -34,13 +39,14 @@ class OccupancyMap:
     resolution: float
     origin_x: float
     origin_y: float
-    occupied: object  # numpy bool array [rows, cols]
-    known: object  # numpy bool array [rows, cols]: False where the map says "unknown"
+    occupied: BoolArray  # [rows, cols]
+    known: BoolArray  # [rows, cols]: False where the map says "unknown"
     source: str
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.occupied.shape
+        rows, cols = self.occupied.shape
+        return rows, cols
 
     def cell(self, x: float, y: float) -> tuple[int, int]:
         """``(row, col)`` of the cell holding world point ``(x, y)`` (may be outside the grid)."""
@@ -52,7 +58,7 @@ class OccupancyMap:
         return (self.origin_x + (col + 0.5) * self.resolution, self.origin_y + (row + 0.5) * self.resolution)
 
     def inside(self, row: int, col: int) -> bool:
-        rows, cols = self.occupied.shape
+        rows, cols = self.shape
         return 0 <= row < rows and 0 <= col < cols
 
     @property
@@ -67,7 +73,7 @@ class OccupancyMap:
         """
         open_runs: dict[tuple[int, int], int] = {}  # (col_start, col_end) -> first row
         boxes: list[tuple[int, int, int, int]] = []
-        rows, _ = self.occupied.shape
+        rows, _ = self.shape
         for row in range(rows + 1):
             runs = set(_runs(self.occupied[row])) if row < rows else set()
             for run in [r for r in open_runs if r not in runs]:
@@ -79,7 +85,8 @@ class OccupancyMap:
                 for r0, c0, r1, c1 in boxes]
 
 
-def _runs(line) -> list[tuple[int, int]]:
+def _runs(line: BoolArray) -> list[tuple[int, int]]:
+    """``(first, end)`` columns of each run of True cells in a grid row."""
     np = engines.numpy()
     padded = np.concatenate(([False], line, [False]))
     edges = np.flatnonzero(padded[1:] != padded[:-1])
@@ -94,7 +101,7 @@ def empty_map(size: float = 30.0, resolution: float = 0.1) -> OccupancyMap:
                         np.ones((cells, cells), dtype=bool), "empty plane")
 
 
-def find_map(folders: list[str | None]) -> Path | None:
+def find_map(folders: Iterable[str | None]) -> Path | None:
     """The first ``map.yaml`` in ``folders``."""
     for folder in folders:
         if folder and (Path(folder) / MAP_FILE).is_file():

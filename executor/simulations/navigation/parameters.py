@@ -87,8 +87,14 @@ def _convert(text: object, kind: type, where: str) -> object:
 
 
 def within(low: float, high: float) -> Callable[[object], str | None]:
-    return lambda value: None if low <= value <= high else f"must be within [{low:g}, {high:g}]"
+    """A check refusing numbers outside ``[low, high]``."""
+    def check(value: object) -> str | None:
+        return None if isinstance(value, (int, float)) and low <= value <= high else f"must be within [{low:g}, {high:g}]"
+    return check
 
 
 def at_least(low: float) -> Callable[[object], str | None]:
-    return lambda value: None if value >= low else f"must be at least {low:g}"
+    """A check refusing numbers below ``low``."""
+    def check(value: object) -> str | None:
+        return None if isinstance(value, (int, float)) and value >= low else f"must be at least {low:g}"
+    return check

@@ -11,8 +11,13 @@ from __future__ import annotations
 
 import heapq
 import math
+from typing import TYPE_CHECKING
 
 from executor.simulations.navigation.costmap import Costmap
+from executor.simulations.navigation.maps import OccupancyMap
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import BoolArray
 
 _SQRT2 = math.sqrt(2.0)
 _MOVES = ((1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0),
@@ -67,12 +72,15 @@ def plan(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]
     return None
 
 
-def _free_goal(grid, lethal, goal: tuple[float, float], tolerance: float) -> tuple[int, int] | None:
+def _free_goal(grid: OccupancyMap, lethal: BoolArray, goal: tuple[float, float],
+               tolerance: float) -> tuple[int, int] | None:
+    """The goal's cell, else the nearest cell within ``tolerance`` that is not lethal."""
     row, col = grid.cell(*goal)
     if grid.inside(row, col) and not lethal[row, col]:
         return row, col
     reach = int(math.ceil(tolerance / grid.resolution))
-    best, best_distance = None, math.inf
+    best: tuple[int, int] | None = None
+    best_distance = math.inf
     for dr in range(-reach, reach + 1):
         for dc in range(-reach, reach + 1):
             r, c = row + dr, col + dc
@@ -82,9 +90,9 @@ def _free_goal(grid, lethal, goal: tuple[float, float], tolerance: float) -> tup
     return best
 
 
-def _path(grid, came_from: dict[int, int], index: int, cols: int,
+def _path(grid: OccupancyMap, came_from: dict[int, int], index: int, cols: int,
           goal: tuple[float, float]) -> list[tuple[float, float]]:
-    cells = []
+    cells: list[tuple[float, float]] = []
     while index != -1:
         cells.append(grid.centre(*divmod(index, cols)))
         index = came_from[index]

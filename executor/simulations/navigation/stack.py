@@ -18,15 +18,22 @@ recoveries (Nav2's ``number_of_retries``) the goal is *aborted*.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from executor.simulations.navigation.controller import FollowerSettings, PathFollower
 from executor.simulations.navigation.costmap import Costmap
 from executor.simulations.navigation.laser import Laser, ScanModification
-from executor.simulations.navigation.localization import DeadReckoning, ParticleFilter, wrap
+from executor.simulations.navigation.localization import DeadReckoning, Localizer, ParticleFilter, wrap
 from executor.simulations.navigation.maps import OccupancyMap
 from executor.simulations.navigation.planner import path_length, plan
+
+if TYPE_CHECKING:
+    from executor.simulations.engines import FloatArray, RandomGenerator
+
+#: ``(x, y, yaw)`` in the map frame
+Pose = tuple[float, float, float]
 
 
 class Base(Protocol):
@@ -43,7 +50,8 @@ class Base(Protocol):
 
     def drive(self, linear: float, angular: float) -> None: ...
 
-    def ray_cast(self, starts: list, ends: list) -> list[float]: ...
+    def ray_cast(self, starts: Sequence[Sequence[float]], ends: Sequence[Sequence[float]]) -> list[float]:
+        """The hit fraction of each ray (see :data:`~executor.simulations.navigation.laser.RayCast`)."""
 
 
 ACTIVE, SUCCEEDED, ABORTED, CANCELED = "active", "succeeded", "aborted", "canceled"
@@ -95,20 +103,20 @@ class RobotStack:
         self.name = name
         self.base = base
         self.settings = settings = settings or StackSettings()
-        self.rng = engines.numpy().random.default_rng(seed)
+        self.rng: RandomGenerator = engines.numpy().random.default_rng(seed)
         self.laser = Laser(base.ray_cast)
         self.modification = ScanModification(seed + 1)
         localise_on_map = use_map and grid_map.has_obstacles
-        self.localizer = (ParticleFilter(grid_map, initial, seed + 2) if localise_on_map
-                          else DeadReckoning(initial))
+        self.localizer: Localizer = (ParticleFilter(grid_map, initial, seed + 2) if localise_on_map
+                                     else DeadReckoning(initial))
         self.mode = "amcl" if localise_on_map else ("slam" if not use_map else "odometry")
         self.costmap = Costmap(grid_map, use_static=use_map, robot_radius=base.radius,
                                inflation_radius=settings.inflation_radius)
         self.follower = PathFollower(settings.follower)
-        self.odometry_pose = (0.0, 0.0, 0.0)
+        self.odometry_pose: Pose = (0.0, 0.0, 0.0)
         self.odometry_distance = 0.0
-        self.last_scan = None
-        self.last_command = (0.0, 0.0)
+        self.last_scan: FloatArray | None = None
+        self.last_command: tuple[float, float] = (0.0, 0.0)
         self.goal: Goal | None = None
         self._next_replan = 0.0
         self._recoveries = 0
@@ -159,26 +167,26 @@ class RobotStack:
     def start(self, poses: list[tuple[float, float, float]], now: float) -> Goal:
         """Accept a new goal (a running one is canceled, as a new Nav2 goal preempts the old)."""
         if self.goal is not None and not self.goal.done:
-            self._finish(CANCELED, "preempted by a new goal", now)
-        self.goal = Goal(list(poses), accepted_at=now)
+            self._finish(self.goal, CANCELED, "preempted by a new goal", now)
+        goal = self.goal = Goal(list(poses), accepted_at=now)
         self._recoveries = 0
         self._paused_until = now
-        self._begin_pose(now)
-        return self.goal
+        self._begin_pose(goal, now)
+        return goal
 
     def cancel(self, now: float) -> None:
         if self.goal is not None and not self.goal.done:
-            self._finish(CANCELED, "canceled", now)
+            self._finish(self.goal, CANCELED, "canceled", now)
 
-    def _begin_pose(self, now: float) -> None:
-        self.follower.set_goal(self.goal.poses[self.goal.index])
+    def _begin_pose(self, goal: Goal, now: float) -> None:
+        self.follower.set_goal(goal.poses[goal.index])
         self._next_replan = now
         self._progress_anchor = self.pose[:2]
         self._progress_since = now
         self._reached_since = None
 
-    def _finish(self, status: str, message: str, now: float) -> None:
-        self.goal.status, self.goal.message, self.goal.finished_at = status, message, now
+    def _finish(self, goal: Goal, status: str, message: str, now: float) -> None:
+        goal.status, goal.message, goal.finished_at = status, message, now
         self._drive(0.0, 0.0)
 
     def _drive(self, linear: float, angular: float) -> None:
@@ -200,33 +208,33 @@ class RobotStack:
         if self.follower.goal_reached(pose):
             goal.index += 1
             if goal.index >= len(goal.poses):
-                self._finish(SUCCEEDED, "goal reached", now)
+                self._finish(goal, SUCCEEDED, "goal reached", now)
             else:
-                self._begin_pose(now)
+                self._begin_pose(goal, now)
                 self._drive(0.0, 0.0)
             return
-        if not self._plan_if_needed(pose, now) or not self._progressing(pose, now):
+        if not self._plan_if_needed(goal, pose, now) or not self._progressing(goal, pose, now):
             return
         linear, angular = self.follower.command(pose)
         if linear > 0.0 and self._collision_ahead(pose):
-            self._recover("the controller saw an obstacle right ahead", now)
+            self._recover(goal, "the controller saw an obstacle right ahead", now)
             return
         self._drive(linear, angular)
 
-    def _recover(self, reason: str, now: float) -> None:
+    def _recover(self, goal: Goal, reason: str, now: float) -> None:
         """Clear the laser obstacles and wait, or abort the goal when the recoveries are used up."""
         self._recoveries += 1
-        self.goal.recoveries = self._recoveries
+        goal.recoveries = self._recoveries
         self._drive(0.0, 0.0)
         if self._recoveries > self.settings.recovery_retries:
-            self._finish(ABORTED, f"{reason}; gave up after {self.settings.recovery_retries} recoveries", now)
+            self._finish(goal, ABORTED, f"{reason}; gave up after {self.settings.recovery_retries} recoveries", now)
             return
         self.costmap.clear_obstacles()
         self.follower.set_path([])
         self._paused_until = self._next_replan = now + self.settings.recovery_wait
         self._progress_anchor, self._progress_since = self.pose[:2], self._paused_until
 
-    def _collision_ahead(self, pose) -> bool:
+    def _collision_ahead(self, pose: Pose) -> bool:
         """An obstacle cell in the strip the robot's front sweeps in the next ``collision_lookahead`` metres."""
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
@@ -242,7 +250,7 @@ class RobotStack:
             distance += step
         return False
 
-    def _plan_if_needed(self, pose, now: float) -> bool:
+    def _plan_if_needed(self, goal: Goal, pose: Pose, now: float) -> bool:
         """Plan when due or when the path ahead is blocked; False while there is no usable path."""
         blocked = bool(self.follower.path) and any(
             self.costmap.is_lethal(px, py) for px, py in self.follower.remaining(pose, 1.5))
@@ -251,25 +259,25 @@ class RobotStack:
         target = self.follower.goal
         path = plan(self.costmap, (pose[0], pose[1]), (target[0], target[1]))
         if path is None:
-            self._recover(f"no path to ({target[0]:.2f}, {target[1]:.2f})", now)
+            self._recover(goal, f"no path to ({target[0]:.2f}, {target[1]:.2f})", now)
             return False
         self._next_replan = now + self.settings.replan_period
         current = self.follower.remaining(pose, math.inf)
         if (blocked or not current
                 or path_length(path) < 0.8 * path_length([(pose[0], pose[1]), *current])):
             self.follower.set_path(path)  # a periodic replan only switches to a clearly shorter path
-        if self.goal.path_length_planned == 0.0:
-            self.goal.path_length_planned = path_length([(pose[0], pose[1]), *path])
+        if goal.path_length_planned == 0.0:
+            goal.path_length_planned = path_length([(pose[0], pose[1]), *path])
         return True
 
-    def _progressing(self, pose, now: float) -> bool:
+    def _progressing(self, goal: Goal, pose: Pose, now: float) -> bool:
         """Nav2's progress checker; False when it called for a recovery."""
         s = self.settings
         if self.follower.position_reached:
             if self._reached_since is None:
                 self._reached_since = now
             if now - self._reached_since > s.progress_timeout:
-                self._finish(ABORTED, "could not turn to the goal's heading", now)
+                self._finish(goal, ABORTED, "could not turn to the goal's heading", now)
                 return False
             return True
         ax, ay = self._progress_anchor
@@ -278,5 +286,5 @@ class RobotStack:
             return True
         if now - self._progress_since <= s.progress_timeout:
             return True
-        self._recover(f"no progress: moved less than {s.progress_radius} m in {s.progress_timeout:g} s", now)
+        self._recover(goal, f"no progress: moved less than {s.progress_radius} m in {s.progress_timeout:g} s", now)
         return False

@@ -6,10 +6,15 @@ PyBullet. The engine is the optional extra ``pybullet``; it is imported only whe
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from executor.simulations.pybullet.simulation import PyBulletSimulation
+
 __all__ = ["PyBulletSimulation"]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     if name == "PyBulletSimulation":
         from executor.simulations.pybullet.simulation import PyBulletSimulation
 

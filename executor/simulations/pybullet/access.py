@@ -10,10 +10,19 @@ the last action of the scenario lets go (the runtime calls every action's ``shut
 from __future__ import annotations
 
 import weakref
+from collections.abc import Mapping
+from typing import Any, Protocol
 
 from executor.actions.base import ActionBase, ActionError
+from executor.simulation import Clock
 from executor.simulations.pybullet.simulation import PyBulletSimulation
 from executor.simulations.pybullet.world import World
+
+
+class LineLogger(Protocol):
+    """What the simulation libraries log through (the scenario's logger, handed to ``setup``)."""
+
+    def info(self, msg: str) -> None: ...
 
 
 class _Shared:
@@ -27,28 +36,31 @@ class _Shared:
         self.driver = "clock"
 
 
-_SHARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: scenario context -> its wall-clock world (forgotten with the context)
+_SHARED: weakref.WeakKeyDictionary[object, _Shared] = weakref.WeakKeyDictionary()
 
 
 class WorldLease:
-    """An action's hold on its scenario's world; made in ``setup(**kwargs)``, released in ``shutdown``."""
+    """An action's hold on its scenario's world; made in ``setup(**kwargs)``, released in ``shutdown``.
 
-    def __init__(self, setup_kwargs: dict) -> None:
+    The world comes from one of two sources: the step-based :class:`PyBulletSimulation`, or the
+    scenario's shared wall-clock world.
+    """
+
+    def __init__(self, setup_kwargs: Mapping[str, Any]) -> None:
         self.input_dir: str | None = setup_kwargs.get("input_dir")
         self.output_dir: str | None = setup_kwargs.get("output_dir")
-        self.clock = setup_kwargs.get("clock")
-        self.logger = setup_kwargs.get("logger")
-        self.tick_period: float | None = setup_kwargs.get("tick_period")
+        self.clock: Clock | None = setup_kwargs.get("clock")
+        self.logger: LineLogger | None = setup_kwargs.get("logger")
         simulation = setup_kwargs.get("simulation")
-        self._simulation: PyBulletSimulation | None = None
-        self._shared: _Shared | None = None
+        self._source: PyBulletSimulation | _Shared
         if simulation is not None:
             if not isinstance(simulation, PyBulletSimulation):
                 raise ActionError(
                     f"this action runs on PyBullet, but the scenario is driven by --simulation "
                     f"{type(simulation).__name__}; use executor.simulations.pybullet:PyBulletSimulation "
                     "or no --simulation")
-            self._simulation = simulation
+            self._source = simulation
         else:
             context = setup_kwargs.get("context")
             if context is None:
@@ -57,48 +69,49 @@ class WorldLease:
             if shared is None:
                 shared = _SHARED[context] = _Shared()
             shared.users += 1
-            self._shared = shared
+            self._source = shared
         self._released = False
 
     @property
     def step_based(self) -> bool:
         """True when a step-based simulation advances the world (the action never steps it)."""
-        return self._simulation is not None
+        return isinstance(self._source, PyBulletSimulation)
 
     @property
     def world(self) -> World:
         """The world, created on first use."""
-        if self._simulation is not None:
-            if self._simulation.world is None:
+        source = self._source
+        if isinstance(source, PyBulletSimulation):
+            if source.world is None:
                 raise ActionError("the PyBullet simulation has no world (reset() was not called)")
-            return self._simulation.world
-        shared = self._shared
-        if shared.world is None:
-            shared.world = World(driver=shared.driver)
-        return shared.world
+            return source.world
+        if source.world is None:
+            source.world = World(driver=source.driver)
+        return source.world
 
     def drive_by_run_action(self) -> None:
         """``sim.run()`` advances this scenario's world, one tick period per tick."""
-        if self._shared is not None:
-            self._shared.driver = "run_action"
-            if self._shared.world is not None:
-                self._shared.world.driver = "run_action"
+        source = self._source
+        if isinstance(source, _Shared):
+            source.driver = "run_action"
+            if source.world is not None:
+                source.world.driver = "run_action"
 
     def catch_up(self) -> None:
         """Let a clock-driven world reach the scenario clock's time (no effect otherwise)."""
-        shared = self._shared
-        if shared is not None and shared.world is not None and self.clock is not None:
-            shared.world.catch_up(self.clock.now())
+        source = self._source
+        if isinstance(source, _Shared) and source.world is not None and self.clock is not None:
+            source.world.catch_up(self.clock.now())
 
     def release(self) -> None:
         """Let go of the world; the last holder closes it."""
-        if self._released or self._shared is None:
+        source = self._source
+        if self._released or not isinstance(source, _Shared):
             return
         self._released = True
-        shared = self._shared
-        shared.users -= 1
-        if shared.users <= 0 and shared.world is not None:
-            world, shared.world = shared.world, None
+        source.users -= 1
+        if source.users <= 0 and source.world is not None:
+            world, source.world = source.world, None
             world.close()
 
 
@@ -110,17 +123,24 @@ class WorldAction(ActionBase):
     has in the world.
     """
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__()
-        self.actor_name = (associated_actor or {}).get("name", "")
-        self.lease: WorldLease | None = None
+        self.actor_name: str = (associated_actor or {}).get("name", "")
+        self._lease: WorldLease | None = None
 
-    def setup(self, **kwargs) -> None:
-        self.lease = WorldLease(kwargs)
+    def setup(self, **kwargs: Any) -> None:
+        self._lease = WorldLease(kwargs)
 
     def shutdown(self) -> None:
-        if self.lease is not None:
-            self.lease.release()
+        if self._lease is not None:
+            self._lease.release()
+
+    @property
+    def lease(self) -> WorldLease:
+        """The hold on the world taken in ``setup``."""
+        if self._lease is None:
+            raise ActionError(f"{self.name}: the runtime did not call setup() before using the PyBullet world")
+        return self._lease
 
     @property
     def world(self) -> World:

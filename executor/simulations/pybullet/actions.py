@@ -9,11 +9,13 @@ scenario's :class:`~executor.simulations.pybullet.world.World` (see
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import py_trees
 
-from executor.actions.base import ActionError
+from executor.actions.base import ActionError, VariableHandle
 from executor.simulations.pybullet.access import WorldAction
 from executor.simulations.pybullet.world import TIME_STEP, scenario_folders
 
@@ -31,7 +33,7 @@ def _resolve_model(action: WorldAction, model: str) -> Path:
 class SimulationInitialize(WorldAction):
     """``sim.initialize(world)``: load the world's URDF file (e.g. ``plane.urdf``) into the physics."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.world_file = ""
 
@@ -52,11 +54,11 @@ class SimulationRun(WorldAction):
     step-based mode the simulation advances the world and this action only keeps running.
     """
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.steps_per_tick = 0
 
-    def setup(self, **kwargs) -> None:
+    def setup(self, **kwargs: Any) -> None:
         super().setup(**kwargs)
         if self.lease.step_based:
             return
@@ -81,12 +83,12 @@ class SimulationRun(WorldAction):
 class ActorSpawn(WorldAction):
     """``actor.spawn(model, pose)``: load the URDF file ``model`` at ``pose`` as the actor's body."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.model = ""
-        self.pose: dict = {}
+        self.pose: dict[str, Any] = {}
 
-    def execute(self, model: str, pose: dict) -> None:
+    def execute(self, model: str, pose: dict[str, Any]) -> None:
         self.model, self.pose = model, pose
 
     def update(self) -> Status:
@@ -107,7 +109,7 @@ class ActorSetJointMotorControl(WorldAction):
     the action ends; the action itself keeps running.
     """
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.target_velocity = 0.0
         self.force = 0.0
@@ -121,13 +123,8 @@ class ActorSetJointMotorControl(WorldAction):
         super().initialise()
         world = self.world
         body = world.body(self.actor_name)
-        p, client = world.p, world.client
-        joints = [j for j in range(p.getNumJoints(body.body_id, physicsClientId=client))
-                  if p.getJointInfo(body.body_id, j, physicsClientId=client)[2] != p.JOINT_FIXED]
-        if joints:
-            p.setJointMotorControlArray(body.body_id, joints, p.VELOCITY_CONTROL,
-                                        targetVelocities=[self.target_velocity] * len(joints),
-                                        forces=[self.force] * len(joints), physicsClientId=client)
+        joints = [joint.index for joint in world.joints(body) if joint.movable]
+        world.drive_joints(body, joints, [self.target_velocity] * len(joints), [self.force] * len(joints))
         self.feedback_message = (f"{len(joints)} joint(s) at velocity {self.target_velocity}, "
                                  f"force {self.force}")
 
@@ -143,7 +140,7 @@ class ActorDistanceTraveled(WorldAction):
     the action's start.
     """
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.distance = 0.0
         self.traveled = 0.0
@@ -168,45 +165,51 @@ class ActorDistanceTraveled(WorldAction):
         return Status.RUNNING
 
 
-def _handle(target_variable, action: str):
-    if not hasattr(target_variable, "set_value"):
-        raise ActionError(f"{action}: target_variable must be a variable (var), got {target_variable!r}")
-    return target_variable
+class _StoreAction(WorldAction):
+    """Base of the actions that store a quantity of the world into a variable (``target_variable``)."""
+
+    #: the action's name in ``osc.pybullet``, for messages
+    osc_name = ""
+
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
+        super().__init__(associated_actor)
+        self.resolve_variable_reference_arguments_in_execute = False
+        self.target: VariableHandle | None = None
+
+    def execute(self, target_variable: object) -> None:
+        if not isinstance(target_variable, VariableHandle):
+            raise ActionError(f"{self.osc_name}: target_variable must be a variable (var), got {target_variable!r}")
+        self.target = target_variable
+
+    def update(self) -> Status:
+        self.lease.catch_up()
+        if self.target is None:
+            raise ActionError(f"{self.osc_name}: no target variable (execute() was not called)")
+        value, self.feedback_message = self.measure()
+        self.target.set_value(value)
+        return Status.SUCCESS
+
+    def measure(self) -> tuple[object, str]:
+        """The value to store, and a line saying what it is."""
+        raise NotImplementedError
 
 
-class SimulationStoreTime(WorldAction):
+class SimulationStoreTime(_StoreAction):
     """``sim.store_time(target_variable)``: the world's simulated time into a ``time`` variable."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
-        super().__init__(associated_actor)
-        self.resolve_variable_reference_arguments_in_execute = False
-        self.target = None
+    osc_name = "store_time"
 
-    def execute(self, target_variable) -> None:
-        self.target = _handle(target_variable, "store_time")
-
-    def update(self) -> Status:
-        self.lease.catch_up()
-        self.target.set_value(self.world.time)
-        self.feedback_message = f"time {self.world.time:.3f} s"
-        return Status.SUCCESS
+    def measure(self) -> tuple[object, str]:
+        now = self.world.time
+        return now, f"time {now:.3f} s"
 
 
-class ActorStorePosition(WorldAction):
+class ActorStorePosition(_StoreAction):
     """``actor.store_position(target_variable)``: the body's base position into a ``position_3d`` variable."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
-        super().__init__(associated_actor)
-        self.resolve_variable_reference_arguments_in_execute = False
-        self.target = None
+    osc_name = "store_position"
 
-    def execute(self, target_variable) -> None:
-        self.target = _handle(target_variable, "store_position")
-
-    def update(self) -> Status:
-        self.lease.catch_up()
+    def measure(self) -> tuple[object, str]:
         world = self.world
         x, y, z = world.position(world.body(self.actor_name))
-        self.target.set_value({"x": x, "y": y, "z": z})
-        self.feedback_message = f"position ({x:.3f}, {y:.3f}, {z:.3f})"
-        return Status.SUCCESS
+        return {"x": x, "y": y, "z": z}, f"position ({x:.3f}, {y:.3f}, {z:.3f})"

@@ -16,8 +16,10 @@ and an IMU on a well-tuned robot approximately does; the stack adds its noise.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from executor.actions.base import ActionError
-from executor.simulations.pybullet.world import World
+from executor.simulations.pybullet.world import Vec3, World
 
 MODEL = "husky/husky.urdf"
 WHEEL_RADIUS = 0.1651        # m, from the URDF
@@ -36,42 +38,35 @@ class HuskyBase:
     front = 0.5
     half_width = 0.35
 
-    def __init__(self, world: World, name: str, pose: tuple[float, float, float]) -> None:
+    def __init__(self, world: World, name: str, pose: Vec3) -> None:
         self.world = world
         self.name = name
         path = world.find_model(MODEL)
         if path is None:
             raise ActionError(f"'{MODEL}' is missing from pybullet_data")
         self.body = world.load_urdf(name, path, (pose[0], pose[1], 0.02), (0.0, 0.0, pose[2]))
-        p, client, body_id = world.p, world.client, self.body.body_id
-        joints = {p.getJointInfo(body_id, j, physicsClientId=client)[1].decode(): j
-                  for j in range(p.getNumJoints(body_id, physicsClientId=client))}
+        joints = {joint.name: joint.index for joint in world.joints(self.body)}
         try:
-            self._left = [joints[n] for n in LEFT]
-            self._right = [joints[n] for n in RIGHT]
+            self._wheels = [joints[n] for n in LEFT + RIGHT]
         except KeyError as exc:
             raise ActionError(f"{MODEL} has no wheel joint {exc}") from None
-        for link in range(-1, len(joints)):
-            p.setCollisionFilterGroupMask(body_id, link, ROBOT_GROUP, 0xFFFF, physicsClientId=client)
-        for wheel in self._left + self._right:
-            p.changeDynamics(body_id, wheel, anisotropicFriction=[1.0, AXLE_FRICTION, 1.0], physicsClientId=client)
+        world.set_collision_group(self.body, ROBOT_GROUP)
+        for wheel in self._wheels:
+            world.set_anisotropic_friction(self.body, wheel, (1.0, AXLE_FRICTION, 1.0))
         self.drive(0.0, 0.0)
 
-    def true_pose(self) -> tuple[float, float, float]:
+    def true_pose(self) -> Vec3:
         """``(x, y, yaw)`` of the base frame (midway between the axles)."""
         return self.world.pose_2d(self.body)
 
-    def measured_velocity(self) -> tuple[float, float, float]:
+    def measured_velocity(self) -> Vec3:
         """``(forward, sideways, yaw rate)`` of the base in its own frame."""
         return self.world.velocity_2d(self.body)
 
     def drive(self, linear: float, angular: float) -> None:
         left = (linear - angular * EFFECTIVE_TRACK / 2.0) / WHEEL_RADIUS
         right = (linear + angular * EFFECTIVE_TRACK / 2.0) / WHEEL_RADIUS
-        p = self.world.p
-        p.setJointMotorControlArray(self.body.body_id, self._left + self._right, p.VELOCITY_CONTROL,
-                                    targetVelocities=[left, left, right, right], forces=[WHEEL_TORQUE] * 4,
-                                    physicsClientId=self.world.client)
+        self.world.drive_joints(self.body, self._wheels, [left, left, right, right], [WHEEL_TORQUE] * 4)
 
-    def ray_cast(self, starts: list, ends: list) -> list[float]:
+    def ray_cast(self, starts: Sequence[Sequence[float]], ends: Sequence[Sequence[float]]) -> list[float]:
         return self.world.ray_cast(starts, ends, ignore_group=ROBOT_GROUP)

@@ -17,30 +17,29 @@ from __future__ import annotations
 
 import zlib
 from collections.abc import Callable
+from typing import Any
 
 from executor.actions.base import ActionError
 from executor.simulations.navigation.maps import MapError, OccupancyMap, empty_map, find_map, load_map
 from executor.simulations.navigation.parameters import NodeGraph, Parameter, ParameterNode, at_least, within
 from executor.simulations.navigation.stack import RobotStack, StackSettings
-from executor.simulations.pybullet.access import WorldLease
+from executor.simulations.pybullet.access import LineLogger, WorldLease
 from executor.simulations.pybullet.husky import HuskyBase
-from executor.simulations.pybullet.world import World, scenario_folders
+from executor.simulations.pybullet.world import Vec3, World, scenario_folders
 
 WALL_HEIGHT = 1.0
 #: (time, topic, message) -> None
-Subscriber = Callable[[float, str, dict], None]
+Subscriber = Callable[[float, str, dict[str, Any]], None]
 
 
 class NavigationWorld:
     """See the module docstring; get it with :meth:`of`."""
 
-    KEY = "navigation"
-
     @classmethod
     def of(cls, lease: WorldLease) -> NavigationWorld:
-        return lease.world.service(cls.KEY, lambda world: cls(world, scenario_folders(lease.input_dir), lease.logger))
+        return lease.world.service(cls, lambda world: cls(world, scenario_folders(lease.input_dir), lease.logger))
 
-    def __init__(self, world: World, folders: list[str], logger=None) -> None:
+    def __init__(self, world: World, folders: list[str], logger: LineLogger | None = None) -> None:
         self.world = world
         self.logger = logger
         self.map = self._load_map(folders)
@@ -73,7 +72,10 @@ class NavigationWorld:
     def _build_world(self) -> None:
         world = self.world
         if not any(body.model.endswith("plane.urdf") for body in world.bodies.values()):
-            world.load_urdf("ground", world.find_model("plane.urdf"), (0.0, 0.0, 0.0), fixed=True)
+            ground = world.find_model("plane.urdf")
+            if ground is None:
+                raise ActionError("'plane.urdf' is missing from pybullet_data")
+            world.load_urdf("ground", ground, (0.0, 0.0, 0.0), fixed=True)
         for i, (x0, y0, x1, y1) in enumerate(self.map.rectangles()):
             world.add_box(f"map.wall{i}", ((x1 - x0) / 2, (y1 - y0) / 2, WALL_HEIGHT / 2),
                           ((x0 + x1) / 2, (y0 + y1) / 2, WALL_HEIGHT / 2), model="map wall")
@@ -102,7 +104,7 @@ class NavigationWorld:
 
     # -- robots ---------------------------------------------------------------------------------
 
-    def base(self, name: str, pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> HuskyBase:
+    def base(self, name: str, pose: Vec3 = (0.0, 0.0, 0.0)) -> HuskyBase:
         """The robot ``name``'s body, spawned at ``pose`` when it is not in the world yet."""
         base = self.bases.get(name)
         if base is None:
@@ -111,7 +113,7 @@ class NavigationWorld:
                 self.logger.info(f"spawned robot '{name}' (Husky) at x={pose[0]:.2f} y={pose[1]:.2f} yaw={pose[2]:.2f}")
         return base
 
-    def start_navigation(self, name: str, initial: tuple[float, float, float], use_map: bool,
+    def start_navigation(self, name: str, initial: Vec3, use_map: bool,
                          namespace: str = "") -> RobotStack:
         """(Re)start the robot's navigation, localised at ``initial`` (spawning the robot there if needed)."""
         base = self.base(name, initial)
@@ -162,7 +164,7 @@ class NavigationWorld:
         self._publish(now, name, "cmd_vel", {"linear": linear, "angular": angular})
         self._publish(now, name, "tf", {"parent": "map", "child": "base_link", "x": ex, "y": ey, "yaw": eyaw})
 
-    def _publish(self, now: float, name: str, topic: str, message: dict) -> None:
+    def _publish(self, now: float, name: str, topic: str, message: dict[str, Any]) -> None:
         namespace = self.namespaces.get(name, "")
         full = f"/{namespace}/{topic}" if namespace else f"/{topic}"
         for subscriber in self.subscribers:

@@ -9,7 +9,9 @@ the engine and ``timeout``/``wait elapsed`` count simulated seconds. Each scenar
 
 from __future__ import annotations
 
-from executor.simulation import SimulationInterface
+from typing import Any
+
+from executor.simulation import SimulationError, SimulationInterface
 from executor.simulations import engines
 from executor.simulations.pybullet.world import TIME_STEP, World
 
@@ -19,21 +21,22 @@ class PyBulletSimulation(SimulationInterface):
 
     def __init__(self) -> None:
         self.world: World | None = None
-        self.logger = None
 
     @property
     def dt(self) -> float:
         return TIME_STEP
 
-    def setup(self, **kwargs) -> None:
-        self.logger = kwargs.get("logger")
+    def setup(self, **kwargs: Any) -> None:
         engines.pybullet()  # fail before the first scenario when the extra is missing
 
-    def reset(self) -> None:
+    def reset(self, **parameters: Any) -> None:
+        """A fresh world; the scenario's parameters are not needed (its actions build the world)."""
         self._close()
         self.world = World(driver="simulation")
 
     def step(self) -> None:
+        if self.world is None:
+            raise SimulationError("PyBulletSimulation.step() before reset(): there is no world to step")
         self.world.step()
 
     def shutdown(self) -> None:

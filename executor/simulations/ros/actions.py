@@ -4,6 +4,8 @@ set_node_parameter (``bag_record`` is in :mod:`executor.simulations.ros.recordin
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import py_trees
 
@@ -23,13 +25,13 @@ class TfCloseTo(WorldAction):
     such frames do in simulation; any other frame the localised pose.
     """
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.threshold = 0.0
         self.point = (0.0, 0.0)
         self.ground_truth = False
 
-    def execute(self, threshold: float, reference_point: dict, robot_frame_id: str = "base_link",
+    def execute(self, threshold: float, reference_point: Mapping[str, Any], robot_frame_id: str = "base_link",
                 sim: bool = False, namespace_override: str = "") -> None:
         self.threshold = threshold
         self.point = (float(reference_point["x"]), float(reference_point["y"]))
@@ -53,7 +55,7 @@ class TfCloseTo(WorldAction):
 class OdometryDistanceTraveled(WorldAction):
     """``robot.odometry_distance_traveled(distance)``: succeeds once odometry has covered ``distance``."""
 
-    def __init__(self, associated_actor: dict | None = None) -> None:
+    def __init__(self, associated_actor: Mapping[str, Any] | None = None) -> None:
         super().__init__(associated_actor)
         self.distance = 0.0
         self.start: float | None = None

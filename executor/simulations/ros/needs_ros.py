@@ -13,7 +13,7 @@ class NeedsRos(ActionBase):
     def __init__(self) -> None:
         super().__init__()
 
-    def execute(self, **arguments) -> None:
+    def execute(self, **arguments: object) -> None:
         """Accept every declared argument."""
 
     def update(self) -> py_trees.common.Status:

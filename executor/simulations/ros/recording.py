@@ -14,6 +14,7 @@ import datetime
 import json
 import os
 from pathlib import Path
+from typing import Any, TextIO
 
 import py_trees
 
@@ -34,11 +35,11 @@ class BagRecord(WorldAction):
         super().__init__(None)
         self.topics: list[str] = []
         self.timestamp_suffix = True
-        self._file = None
+        self._file: TextIO | None = None
         self._last_flush = 0.0
         self.folder: Path | None = None
 
-    def execute(self, topics: list, timestamp_suffix: bool = True, hidden_topics: bool = False,
+    def execute(self, topics: list[object], timestamp_suffix: bool = True, hidden_topics: bool = False,
                 storage: str = "", use_sim_time: bool = False) -> None:
         self.topics = [str(t) for t in topics]
         self.timestamp_suffix = timestamp_suffix
@@ -71,7 +72,7 @@ class BagRecord(WorldAction):
         self.logger.info(f"recording to {self.folder}")
         return Status.SUCCESS
 
-    def _receive(self, now: float, topic: str, message: dict) -> None:
+    def _receive(self, now: float, topic: str, message: dict[str, Any]) -> None:
         if self._file is None or (self.topics and topic not in self.topics):
             return
         self._file.write(json.dumps({"t": round(now, 6), "topic": topic, "message": message}) + "\n")

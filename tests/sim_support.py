@@ -1,4 +1,8 @@
-"""Helpers for the real-engine tests (``test_sim_*.py``): markers for the extras, the example package, runs."""
+"""Helpers for the real-engine tests (``test_sim_*.py``): the example package, runs, reading the results.
+
+The engines are the ``sim`` extra, which ``.ci/run`` installs: without them these tests fail (they
+are not skipped), as every test of a part the project ships must be able to fail.
+"""
 
 from __future__ import annotations
 
@@ -17,12 +21,6 @@ EXAMPLES = ROOT / "examples"
 BIN = Path(sys.executable).parent
 PYBULLET_SIM = "executor.simulations.pybullet:PyBulletSimulation"
 BALL_SIM = f"{EXAMPLES / 'mujoco' / 'sim.py'}:BallSimulation"
-
-needs_pybullet = pytest.mark.skipif(
-    importlib.util.find_spec("pybullet") is None or importlib.util.find_spec("numpy") is None,
-    reason="the pybullet extra is not installed (pip install -e '.[pybullet]')")
-needs_mujoco = pytest.mark.skipif(importlib.util.find_spec("mujoco") is None,
-                                  reason="the mujoco extra is not installed (pip install -e '.[mujoco]')")
 
 
 def run(command: str, *args: str, cwd: Path, env: dict | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
@@ -59,16 +57,17 @@ def driven(text: str) -> list[tuple[float, float]]:
     return [(float(a), float(b)) for a, b in re.findall(r"driven ([0-9.]+) m \(straight line ([0-9.]+) m\)", text)]
 
 
-def mujoco_drop_env(tmp_path: Path) -> dict:
-    """An environment in which the example package ``mujoco_drop`` is importable (installed, or into tmp)."""
+def mujoco_drop_env(tmp_path: Path) -> dict[str, str]:
+    """An environment in which the example package ``mujoco_drop`` is importable: as is (``.ci/run``
+    installs it), else installed into ``tmp_path`` for the test's child processes. Fails when it cannot be."""
     if importlib.util.find_spec("mujoco_drop") is not None:
         return {}
     target = tmp_path / "site"
-    done = None
+    errors = []
     for isolation in (["--no-build-isolation"], []):
         done = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", *isolation, "--target",
                                str(target), str(EXAMPLES / "mujoco")], capture_output=True, text=True, cwd=tmp_path)
         if done.returncode == 0:
             return {"PYTHONPATH": str(target)}
-    pytest.skip(f"cannot install examples/mujoco here: {done.stderr.strip().splitlines()[-1:]}")
-    return {}
+        errors.append(done.stderr.strip())
+    pytest.fail("cannot install examples/mujoco (pip install -e examples/mujoco):\n" + "\n".join(errors))

@@ -7,9 +7,6 @@ import zlib
 from pathlib import Path
 
 import pytest
-from sim_support import needs_pybullet
-
-pytestmark = needs_pybullet
 
 
 def _paeth(a: int, b: int, c: int) -> int:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from sim_support import BALL_SIM, EXAMPLES, execute, logged_numbers, mujoco_drop_env, needs_mujoco, verdicts
+from sim_support import BALL_SIM, EXAMPLES, execute, logged_numbers, mujoco_drop_env, verdicts
 
 DROP = EXAMPLES / "mujoco" / "drop.osc"
 
 
-@needs_mujoco
 def test_ball_dropped_from_two_metres_lands_in_time(tmp_path):
     env = mujoco_drop_env(tmp_path)
     done = execute(str(DROP), "--simulation", BALL_SIM, "-o", "out", cwd=tmp_path, env=env)
@@ -17,7 +16,6 @@ def test_ball_dropped_from_two_metres_lands_in_time(tmp_path):
     assert abs(landed[0] - (2 * 2.0 / 9.81) ** 0.5) < 0.01  # free fall: t = sqrt(2 h / g)
 
 
-@needs_mujoco
 def test_a_higher_drop_misses_the_timeout_and_a_throw_lands_farther(tmp_path):
     env = mujoco_drop_env(tmp_path)
     (tmp_path / "high.yaml").write_text("drop:\n  drop_height: 5.0\n", encoding="utf-8")
@@ -35,7 +33,6 @@ def test_a_higher_drop_misses_the_timeout_and_a_throw_lands_farther(tmp_path):
     assert runs[0].stdout == runs[1].stdout  # the same parameters give the same physics
 
 
-@needs_mujoco
 def test_the_action_needs_the_simulation(tmp_path):
     env = mujoco_drop_env(tmp_path)
     done = execute(str(DROP), "-o", "out", cwd=tmp_path, env=env)

@@ -6,10 +6,10 @@ import json
 import re
 from pathlib import Path
 
-from sim_support import EXAMPLES, PYBULLET_SIM, driven, execute, needs_pybullet, run, verdicts
+import pytest
+from sim_support import EXAMPLES, PYBULLET_SIM, driven, execute, run, verdicts
 
 NAVIGATION = EXAMPLES / "navigation"
-pytestmark = needs_pybullet
 
 
 def simulate(scenario: Path, cwd: Path, *extra: str, out: str = "out"):
@@ -38,6 +38,7 @@ def test_navigation_with_slam(tmp_path):
     assert "navigation up (slam)" in done.stdout
 
 
+@pytest.mark.slow
 def test_navigation_with_obstacle_detours_the_same_way_every_time(tmp_path):
     logs = []
     for i in range(2):
@@ -51,6 +52,7 @@ def test_navigation_with_obstacle_detours_the_same_way_every_time(tmp_path):
     assert logs[0] == logs[1]  # deterministic: the same spawn, detour and times on every run
 
 
+@pytest.mark.slow
 def test_nav_to_pose_variants_reach_both_goals(tmp_path):
     files = variants(NAVIGATION / "test_nav_to_pose.osc", tmp_path)
     assert [f.name for f in files] == ["test_nav_to_pose0.sce", "test_nav_to_pose1.sce"]
@@ -60,6 +62,7 @@ def test_nav_to_pose_variants_reach_both_goals(tmp_path):
     assert "goal accepted: (3.00, 3.00, yaw 0.00)" in done.stdout  # behind the shelf wall
 
 
+@pytest.mark.slow
 def test_fault_injection_variant_runs_and_records(tmp_path):
     files = variants(NAVIGATION / "test_fault_injection.osc", tmp_path)
     assert len(files) == 64
@@ -74,6 +77,7 @@ def test_fault_injection_variant_runs_and_records(tmp_path):
     assert topics == {"/robot_pose_loc", "/robot_pose_gt", "/cmd_vel", "/amcl_pose", "/odom", "/tf"}
 
 
+@pytest.mark.slow
 def test_strong_scan_noise_makes_navigation_give_up(tmp_path):
     files = variants(NAVIGATION / "test_fault_injection.osc", tmp_path)
     done, result = simulate(files[56], tmp_path)  # noise 0.7 m, no drops

@@ -7,19 +7,17 @@ import sys
 import time
 from pathlib import Path
 
-from sim_support import EXAMPLES, PYBULLET_SIM, execute, logged_numbers, needs_pybullet, run, verdicts
+from sim_support import EXAMPLES, PYBULLET_SIM, execute, logged_numbers, run, verdicts
 
 EXAMPLE = EXAMPLES / "pybullet" / "example_pybullet.osc"
 
 
-@needs_pybullet
 def test_example_pybullet_step_based(tmp_path):
     done = execute(str(EXAMPLE), "--simulation", PYBULLET_SIM, "-o", "out", cwd=tmp_path)
     assert done.returncode == 0, done.stdout
     assert verdicts(tmp_path / "out" / "test.xml") == {"example_pybullet": "passed"}
 
 
-@needs_pybullet
 def test_example_pybullet_wall_clock_tick_steps_one_tick_period_per_tick(tmp_path):
     started = time.monotonic()
     done = execute(str(EXAMPLE), "-s", "0.05", "-o", "out", cwd=tmp_path)
@@ -29,7 +27,6 @@ def test_example_pybullet_wall_clock_tick_steps_one_tick_period_per_tick(tmp_pat
     assert elapsed > 2.0  # the physics keeps pace with the wall clock: the drive takes real seconds
 
 
-@needs_pybullet
 def test_tick_period_must_be_a_whole_number_of_physics_steps(tmp_path):
     done = execute(str(EXAMPLE), "-s", "0.03", "-o", "out", cwd=tmp_path)
     assert done.returncode == 1
@@ -38,7 +35,6 @@ def test_tick_period_must_be_a_whole_number_of_physics_steps(tmp_path):
     assert "Traceback" not in done.stdout
 
 
-@needs_pybullet
 def test_the_same_variant_gives_the_same_outcome(tmp_path):
     made = run("scenario_variation", str(EXAMPLES / "pybullet" / "drive_variation_list.osc"), "-o", "in",
                "--store", f"sqlite:///{tmp_path / 'store.db'}", cwd=tmp_path)
@@ -54,7 +50,6 @@ def test_the_same_variant_gives_the_same_outcome(tmp_path):
     assert 2.5 < drive_time[0] < 5.0
 
 
-@needs_pybullet
 def test_unknown_model_is_a_located_error(tmp_path):
     scenario = tmp_path / "s.osc"
     scenario.write_text(EXAMPLE.read_text(encoding="utf-8").replace("husky/husky.urdf", "nope/robot.urdf"),

@@ -10,15 +10,17 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import pytest
 from sim_support import (
     BALL_SIM,
     EXAMPLES,
     PYBULLET_SIM,
     mujoco_drop_env,
-    needs_mujoco,
-    needs_pybullet,
     run,
 )
+
+# Each test expands a variation and runs a batch of its variants: several seconds each.
+pytestmark = pytest.mark.slow
 
 
 def variate_and_batch(source: Path, tmp_path: Path, simulation: str, keep: list[int] | None = None,
@@ -43,7 +45,6 @@ def variate_and_batch(source: Path, tmp_path: Path, simulation: str, keep: list[
     return outcome
 
 
-@needs_pybullet
 def test_pybullet_drive_variation(tmp_path):
     outcome = variate_and_batch(EXAMPLES / "pybullet" / "drive_variation_list.osc", tmp_path, PYBULLET_SIM,
                                 keep=[0, 5, 10, 15])
@@ -56,7 +57,6 @@ def test_pybullet_drive_variation(tmp_path):
     assert outcome["drive_variation_list10"][1] == {"wheel_speed": "8mps", "motor_force": "1.0"}
 
 
-@needs_mujoco
 def test_mujoco_drop_variation(tmp_path):
     env = mujoco_drop_env(tmp_path)
     outcome = variate_and_batch(EXAMPLES / "mujoco" / "drop_variation_list.osc", tmp_path, BALL_SIM,
@@ -67,7 +67,6 @@ def test_mujoco_drop_variation(tmp_path):
                         "drop_variation_list12": "passed", "drop_variation_list23": "failed"}
 
 
-@needs_pybullet
 def test_fault_injection_sweep_reduced(tmp_path):
     source = EXAMPLES / "navigation" / "test_fault_injection.osc"
     outcome = variate_and_batch(source, tmp_path, PYBULLET_SIM, keep=[0, 7, 56, 58])

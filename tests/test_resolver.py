@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import textwrap
@@ -244,14 +245,19 @@ def test_relative_import_and_unknown_library(tmp_path):
 
 EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples").rglob("*.osc")
                   if "build" not in p.parts)
+#: examples written for language support that is still to come (cover(), range keeps, --strategy lhs)
+AWAITING = pytest.mark.xfail(strict=True, reason="needs cover()/record(), range keeps and --strategy lhs")
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+@pytest.mark.parametrize("path", [pytest.param(p, marks=AWAITING) if "    cover(" in p.read_text(encoding="utf-8")
+                                  else p for p in EXAMPLES], ids=[p.name for p in EXAMPLES])
 def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
     from coverage_engine.parse.parser import parse_file
 
     unit = parse_file(path)
+    if "import osc.mujoco_drop\n" in unit.text and importlib.util.find_spec("mujoco_drop") is None:
+        pytest.fail("the library of examples/mujoco is not installed: pip install -e examples/mujoco (.ci/run does)")
     if "in [" in unit.text and "keep(" in unit.text:
         with pytest.raises(UnsupportedFeatureError, match="scenario_variation"):
             load_scenario_file(path)

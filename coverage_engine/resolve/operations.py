@@ -131,6 +131,11 @@ def coerce(value: TypedExpr, target: OscType, location: Location, what: str,
         if item.is_const:
             return TypedExpr(model.Const([item.value]), target, item.is_literal)
         return TypedExpr(model.MakeList((item.expr,)), target, False)
+    literal = value.value if value.is_literal and value.is_const else None
+    if isinstance(target, PhysicalType) and src in (INT, UINT, FLOAT) and isinstance(literal, (int, float)):
+        # a plain number written for a physical quantity is in SI base units, as the reference
+        # implementation reads it (its PyBullet example writes ``position_3d(z: 0.5)``)
+        return TypedExpr(model.Const(float(literal)), target, True)
     if not assignable(src, target):
         raise OscTypeError(f"{what}: expected {target}, got {src}", location)
     if value.is_const and (target is FLOAT or target is UINT or isinstance(target, (PhysicalType, ListType))):

@@ -173,6 +173,8 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     # A .sce file's user modules live beside the .osc it was generated from: the model says where.
     model_dirs = [d for scenario_file, _ in loaded for d in scenario_file.search_paths]
     add_import_paths([os.getcwd(), scenario_dir, *model_dirs])
+    if request.scenario.endswith(".sce") and model_dirs and os.path.isdir(model_dirs[0]):
+        scenario_dir = os.path.abspath(model_dirs[0])  # a variant's files (maps, models) sit beside its source
     runs = plan_runs(loaded, output_root)
     names = report_names(request.scenario, runs) if output_root else None
     if not runs:

@@ -1,0 +1,1 @@
+"""Actions for the MuJoCo drop example (see ../README.md)."""

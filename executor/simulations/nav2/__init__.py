@@ -1,0 +1,1 @@
+"""``osc.nav2`` on the PyBullet navigation backend (see ``actions.py``)."""

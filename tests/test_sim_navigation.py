@@ -58,7 +58,8 @@ def test_nav_to_pose_variants_reach_both_goals(tmp_path):
     assert [f.name for f in files] == ["test_nav_to_pose0.sce", "test_nav_to_pose1.sce"]
     for i, variant in enumerate(files):
         done, result = simulate(variant, tmp_path, out=f"out{i}")
-        assert result == {"nav2_simulation_nav_to_pose": "passed"}, done.stdout
+        (name, verdict), = result.items()            # a variant's testcase is named after the variant
+        assert name.startswith(f"{variant.stem}[") and verdict == "passed", done.stdout
     assert "goal accepted: (3.00, 3.00, yaw 0.00)" in done.stdout  # behind the shelf wall
 
 
@@ -67,7 +68,7 @@ def test_fault_injection_variant_runs_and_records(tmp_path):
     files = variants(NAVIGATION / "test_fault_injection.osc", tmp_path)
     assert len(files) == 64
     done, result = simulate(files[0], tmp_path)  # no noise, no drops
-    assert result == {"nav2_simulation_fault_injection": "passed"}, done.stdout
+    assert list(result.values()) == ["passed"], done.stdout
     assert "set laserscan_modification.gaussian_noise_std_deviation = 0.0" in done.stdout
     assert len(driven(done.stdout)) == 2  # there and back
     bag = tmp_path / "out" / "rosbag2"  # timestamp_suffix: false
@@ -82,7 +83,7 @@ def test_strong_scan_noise_makes_navigation_give_up(tmp_path):
     files = variants(NAVIGATION / "test_fault_injection.osc", tmp_path)
     done, result = simulate(files[56], tmp_path)  # noise 0.7 m, no drops
     assert "gaussian_noise_std_deviation = 0.7" in done.stdout
-    assert result == {"nav2_simulation_fault_injection": "failure"}
+    assert list(result.values()) == ["failure"]
     assert "gave up after 6 recoveries" in done.stdout
 
 

@@ -59,14 +59,15 @@ def test_regeneration_replaces_and_is_idempotent(tmp_path):
     before = (tmp_path / "out" / "main1.sce").read_bytes()
     result = run(tmp_path, "main.osc")
     assert result.returncode == 0
-    assert "replacing 7 .sce file(s) of an earlier generation" in result.stdout
+    assert "replacing 6 .sce file(s) of an earlier generation" in result.stdout
+    assert "leaving 1 other .sce file(s) in out/ untouched" in result.stdout
     assert (tmp_path / "out" / "main1.sce").read_bytes() == before
-    assert not (tmp_path / "out" / "other7.sce").exists()
+    assert (tmp_path / "out" / "other7.sce").read_text() == "old"
     assert (tmp_path / "out" / "notes.txt").read_text() == "keep me"
     assert _store_rows(tmp_path) == {"source_files": 1, "variation_runs": 2, "variants": 6}
     (tmp_path / "main.osc").write_text(TWO_KEEPS.replace(", 'B3'", ""))
     assert run(tmp_path, "main.osc", "-t", "out").returncode == 0
-    assert len(list((tmp_path / "out").glob("*.sce"))) == 4
+    assert len(list((tmp_path / "out").glob("main*.sce"))) == 4
 
 
 def test_list_writes_nothing(tmp_path):

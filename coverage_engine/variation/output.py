@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 from collections.abc import Callable, Container
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,12 +50,73 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents)
 
 
-def earlier_generation(output_dir: str | os.PathLike) -> list[Path]:
-    """The ``.sce`` files directly in ``output_dir`` (an earlier generation, to be replaced)."""
+def earlier_generation(output_dir: str | os.PathLike, source: str | os.PathLike) -> list[Path]:
+    """The ``.sce`` files in ``output_dir`` that an earlier generation of ``source`` wrote.
+
+    Only files named ``<source stem><index>.sce`` that carry our marker and name the same source file
+    (name and folder) count: variants of another ``.osc`` in the same folder, hand-written files and
+    other tools' files are never part of it, so they are never replaced or removed.
+    """
     folder = Path(output_dir)
     if not folder.is_dir():
         return []
-    return sorted(p for p in folder.iterdir() if p.suffix == SUFFIX and p.is_file())
+    source = Path(source)
+    return sorted(p for p in _named_like_variants(folder, source.stem)
+                  if not p.is_symlink() and p.is_file() and written_from(p, source))
+
+
+def foreign_files(output_dir: str | os.PathLike, source: str | os.PathLike, count: int) -> list[Path]:
+    """Entries of ``output_dir`` under the name of one of ``count`` variants of ``source`` that no
+    generation of it wrote.
+
+    Writing the new generation would replace them (or write through them, for a symbolic link), so
+    the caller refuses to start while there are any.
+    """
+    folder = Path(output_dir)
+    if not folder.is_dir():
+        return []
+    source = Path(source)
+    start, end = len(source.stem), -len(SUFFIX)
+    return sorted(p for p in _named_like_variants(folder, source.stem)
+                  if int(p.name[start:end]) < count and str(int(p.name[start:end])) == p.name[start:end]
+                  and (p.is_symlink() or not p.is_file() or not written_from(p, source)))
+
+
+def _named_like_variants(folder: Path, stem: str) -> list[Path]:
+    pattern = re.compile(re.escape(stem) + r"[0-9]+" + re.escape(SUFFIX))
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return []
+    return [folder / name for name in names if pattern.fullmatch(name)]
+
+
+#: How much of a ``.sce`` file's head is read to tell which source it was generated from.
+_HEAD_BYTES = 8192
+_HEAD_FIELD = re.compile(r'^(source|source_dir): (".*")$', re.MULTILINE)
+
+
+def written_from(path: Path, source: Path) -> bool:
+    """Whether ``path`` is a ``.sce`` that ``scenario_variation`` generated from ``source``."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            head = handle.read(_HEAD_BYTES)
+    except OSError:
+        return False
+    if not is_sce_text(head):
+        return False
+    fields: dict[str, str] = {}
+    for key, quoted in _HEAD_FIELD.findall(head):
+        try:
+            value = json.loads(quoted)
+        except ValueError:
+            return False
+        if isinstance(value, str):
+            fields.setdefault(key, value)
+    if fields.get("source") != source.name or "source_dir" not in fields:
+        return False
+    recorded = (path.parent / fields["source_dir"]).resolve() if fields["source_dir"] else path.parent.resolve()
+    return recorded == source.resolve().parent
 
 
 def remove_files(paths: list[Path]) -> int:
@@ -67,15 +129,6 @@ def remove_files(paths: list[Path]) -> int:
         except FileNotFoundError:
             pass
     return removed
-
-
-def is_ours(path: Path) -> bool:
-    """Whether ``path`` starts like a ``.sce`` we write (the reference tool's ``.sce`` does not)."""
-    try:
-        with open(path, encoding="utf-8", errors="replace") as handle:
-            return is_sce_text(handle.read(64))
-    except OSError:
-        return False
 
 
 def _assignment_fragments(plan: VariationPlan) -> list[list[str]]:

@@ -20,7 +20,8 @@ import struct
 import sys
 
 _HEADER = struct.Struct("!II")
-_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
+#: ``O_NOFOLLOW``: a symbolic link planted under a variant's name is never written through.
+_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0) | getattr(os, "O_NOFOLLOW", 0)
 _BATCH = 1 << 20
 
 

@@ -55,6 +55,10 @@ class TooManyVariants(OscError):
     """more combinations than --max-variants allows"""
 
 
+class ForeignFilesInOutput(OscError):
+    """files in the output folder that this generation would replace but did not write"""
+
+
 @dataclass(frozen=True)
 class VariationRequest:
     """One ``scenario_variation`` call: the file to vary and the command line's options."""
@@ -118,16 +122,36 @@ def _open_store(url: str | None) -> Engine:
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine) -> int:
-    from coverage_engine.variation.output import earlier_generation, generate, remove_files, source_sha256
+    from coverage_engine.variation.output import (
+        earlier_generation,
+        foreign_files,
+        generate,
+        remove_files,
+        source_sha256,
+    )
     from store.database import StoreError
     from store.variants import VariantRecord, VariationRecorder
 
     output_dir = Path(request.output_dir)
     # Files of the new generation overwrite those of the same name in place (far cheaper than
     # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
-    old = {p.name: p for p in earlier_generation(output_dir)}
+    # Only what an earlier generation of the same source wrote is replaced; a file of the same name that
+    # it did not write (hand-written, another tool's, a symbolic link) stops the run before anything is written.
+    foreign = foreign_files(output_dir, plan.path, plan.total)
+    if foreign:
+        shown = ", ".join(_printable(p.name) for p in foreign[:3]) + (f" and {len(foreign) - 3} more"
+                                                                      if len(foreign) > 3 else "")
+        raise ForeignFilesInOutput(
+            f"{output_dir}/ holds {len(foreign)} file(s) named like variants of {plan.path.name} that "
+            f"scenario_variation did not generate from it ({shown}); nothing was written",
+            Location(str(plan.path), 0, 0),
+            hint="move those files away, or write the variants to another folder with -o")
+    old = {p.name: p for p in earlier_generation(output_dir, plan.path)}
     if old:
         echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
+    others = _other_sce_files(output_dir, set(old))
+    if others:
+        echo(f"leaving {others} other .sce file(s) in {output_dir}/ untouched (not variants of {plan.path.name})")
     debug, verbose = request.debug, plan.total <= LIST_FILES_UP_TO
     skipped = 0
     kept = "files of the earlier generation were kept"
@@ -188,6 +212,20 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine) -> in
         summary += f"; {skipped} combination(s) skipped because they do not resolve"
     echo(summary)
     return 1 if skipped else 0
+
+
+def _other_sce_files(folder: Path, ours: set[str]) -> int:
+    """How many ``.sce`` files in ``folder`` this generation neither writes nor replaces."""
+    try:
+        return sum(1 for name in os.listdir(folder) if name.endswith(".sce") and name not in ours)
+    except OSError:
+        return 0
+
+
+def _printable(name: str) -> str:
+    """A file name fit for the terminal: control characters and undecodable bytes escaped."""
+    return name.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace").encode(
+        "unicode_escape").decode("ascii") if not name.isprintable() else name
 
 
 class _ModelLog:

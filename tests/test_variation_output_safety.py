@@ -1,0 +1,90 @@
+"""scenario_variation touches only files it generated from the same source (issue 21, items 1 and 3)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SCENARIO = """import osc.helpers
+
+scenario test:
+    do serial:
+        log() with:
+            keep(it.msg in ['A1', 'A2', 'A3'])
+"""
+
+
+def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=60)
+
+
+def names(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_second_source_into_the_same_folder_keeps_the_first(tmp_path):
+    (tmp_path / "cut.osc").write_text(SCENARIO)
+    (tmp_path / "merge.osc").write_text(SCENARIO.replace("'A3'", "'A3', 'A4'"))
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    result = vary(tmp_path, "merge.osc")
+    assert result.returncode == 0, result.stderr
+    assert "leaving 3 other .sce file(s) in out/ untouched" in result.stdout
+    assert names(tmp_path / "out") == ["cut0.sce", "cut1.sce", "cut2.sce",
+                                       "merge0.sce", "merge1.sce", "merge2.sce", "merge3.sce"]
+
+
+def test_hand_written_and_other_tools_files_survive_regeneration(tmp_path):
+    (tmp_path / "cut.osc").write_text(SCENARIO)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mine.sce").write_text("hand-written\n")
+    (out / "reference_tool.sce").write_text("model: x\n")
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    assert (out / "mine.sce").read_text() == "hand-written\n"
+    assert (out / "reference_tool.sce").read_text() == "model: x\n"
+
+
+def test_fewer_variants_remove_only_the_stale_ones_of_the_same_source(tmp_path):
+    (tmp_path / "cut.osc").write_text(SCENARIO)
+    (tmp_path / "cut2.osc").write_text(SCENARIO)       # its variants cut20.sce... look like cut's
+    assert vary(tmp_path, "cut2.osc").returncode == 0
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    (tmp_path / "cut.osc").write_text(SCENARIO.replace(", 'A3'", ""))
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    assert names(tmp_path / "out") == ["cut0.sce", "cut1.sce", "cut20.sce", "cut21.sce", "cut22.sce"]
+
+
+def test_a_foreign_file_under_a_variant_name_stops_before_writing(tmp_path):
+    (tmp_path / "cut.osc").write_text(SCENARIO)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "cut1.sce").write_text("somebody else's\n")
+    result = vary(tmp_path, "cut.osc")
+    assert result.returncode == 1
+    assert "cut.osc: error:" in result.stderr and "cut1.sce" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert names(out) == ["cut1.sce"]
+    assert (out / "cut1.sce").read_text() == "somebody else's\n"
+
+
+def test_a_planted_symbolic_link_is_never_written_through(tmp_path):
+    (tmp_path / "cut.osc").write_text(SCENARIO)
+    out = tmp_path / "out"
+    assert vary(tmp_path, "cut.osc").returncode == 0
+    victim = tmp_path / "victim"
+    victim.write_text("secret\n")
+    (out / "cut2.sce").unlink()
+    (out / "cut2.sce").symlink_to(victim)
+    result = vary(tmp_path, "cut.osc")
+    assert result.returncode == 1
+    assert "cut2.sce" in result.stderr
+    assert victim.read_text() == "secret\n"
+    assert (out / "cut2.sce").is_symlink()

@@ -58,16 +58,15 @@ _parsed_cache: dict[tuple[str, float], CompilationUnit] = {}
 
 #: Files whose content shapes a parsed unit (relative to ``coverage_engine/``); a change to any of them
 #: invalidates the disk cache.
-_PARSER_FILES = ("parse/grammar.lark", "parse/lexer.py", "parse/indenter.py", "parse/syntax.py",
-                 "parse/transformer.py", "parse/transformer_expr.py", "parse/strings.py", "location.py",
-                 "records.py")
+_PARSER_FILES = ("parse/grammar.lark", "parse/lexer.py", "parse/indenter.py", "parse/lalr.py", "parse/tables.py",
+                 "parse/parser.py", "parse/syntax.py", "parse/transformer.py", "parse/transformer_expr.py",
+                 "parse/strings.py", "location.py", "records.py")
 
 
-def _disk_cache_path(path: Path, stat: os.stat_result) -> Path:
+def _disk_cache_path(path: Path, stat: os.stat_result) -> Path | None:
     """Where the parsed form of an imported file is kept between runs (next to the parser tables)."""
     package = Path(__file__).resolve().parent.parent
-    parts = [str(path), str(stat.st_mtime_ns), str(stat.st_size)]
-    parts += [str(os.stat(package / name).st_mtime_ns) for name in _PARSER_FILES]
+    parts = [str(path), str(stat.st_mtime_ns), str(stat.st_size), cache.files_digest(package, _PARSER_FILES)]
     return cache.cache_file("unit" + cache.text_digest("|".join(parts)), ".unit")
 
 

@@ -16,7 +16,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from coverage_engine.parse.cache import cache_file, load, store, text_digest
+from coverage_engine.parse.cache import cache_file, files_digest, load, store, text_digest
 
 GRAMMAR_PATH = Path(__file__).resolve().parent / "grammar.lark"
 FORMAT = 2
@@ -80,13 +80,27 @@ def _build(grammar_text: str) -> Tables:
 _TABLES: Tables | None = None
 
 
+def _lark_version() -> str:
+    """Which lark is installed, without importing it (~45 ms) or importlib.metadata (~13 ms): the
+    location, size and modification time of its ``__init__.py``, which names its version."""
+    from importlib.util import find_spec
+
+    spec = find_spec("lark")
+    if spec is None or not spec.origin:
+        return "none"
+    return files_digest(Path(spec.origin).parent, ("__init__.py", "parsers/lalr_analysis.py")) + spec.origin
+
+
 def tables() -> Tables:
     """The tables for the current grammar: from the pickle cache, else built with lark and cached."""
     global _TABLES
     if _TABLES is not None:
         return _TABLES
     grammar_text = GRAMMAR_PATH.read_text(encoding="utf-8")
-    cache = cache_file(text_digest(f"{FORMAT}\n{grammar_text}"))
+    # The tables' shape is decided here and read by the lexer, the indenter and the LALR driver: a
+    # change to any of them (or another lark) must not reuse tables built for the old code.
+    sources = files_digest(GRAMMAR_PATH.parent, ("tables.py", "lexer.py", "indenter.py", "lalr.py"))
+    cache = cache_file(text_digest(f"{FORMAT}\n{_lark_version()}\n{sources}\n{grammar_text}"))
     loaded = load(cache, Tables)
     if loaded is not None:
         _TABLES = loaded

@@ -121,8 +121,12 @@ def _entry(file: str, node: yaml.Node, default: ItemPlan, text: str, what: str) 
 
 def parse_plan(text: str, file: str = "plan.yaml") -> CoveragePlan:
     """Parse and check a plan's text."""
+    from coverage_engine.yaml_bounds import YamlLimitError, compose_bounded
+
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        root = compose_bounded(text)
+    except YamlLimitError as exc:
+        raise PlanError(str(exc), location(file, exc.line, exc.column) if exc.line else location(file)) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = location(file, mark.line + 1, mark.column + 1) if mark else location(file)

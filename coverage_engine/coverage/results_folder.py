@@ -26,6 +26,7 @@ from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
+from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
 REPORT_FILE = "test.xml"
 LOG_FILE = "log.txt"
@@ -53,8 +54,8 @@ def _assignment_from_sce(path: str) -> dict[str, object]:
         if os.path.getsize(path) > MAX_SCE_BYTES:
             return {}
         with open(path, encoding="utf-8") as handle:
-            doc = yaml.safe_load(handle)
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+            doc = load_bounded(handle.read(), yaml.SafeLoader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, YamlLimitError):
         return {}
     assignment = doc.get("assignment") if isinstance(doc, dict) else None
     if not isinstance(assignment, dict):

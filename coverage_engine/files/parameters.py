@@ -50,8 +50,15 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
         raise ParameterFileError("scenario parameter file not found", whole_file) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
+    from coverage_engine.yaml_bounds import YamlLimitError, load_all_bounded
+
     try:
-        documents = list(yaml.load_all(text, Loader=UniqueKeyLoader))
+        documents = list(load_all_bounded(text, UniqueKeyLoader))
+    except YamlLimitError as exc:
+        lines = text.splitlines()
+        line = lines[exc.line - 1] if 0 < exc.line <= len(lines) else None
+        raise ParameterFileError(str(exc), Location(str(path), exc.line, exc.column) if exc.line else whole_file,
+                                 source_line=line) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = Location(str(path), mark.line + 1, mark.column + 1) if mark is not None else whole_file

@@ -282,9 +282,14 @@ def is_sce_text(head: str) -> bool:
 def _load_yaml(text: str, path: str):
     import yaml
 
+    from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
+
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     try:
-        return yaml.load(text, Loader=loader)  # noqa: S506 - a safe loader
+        return load_bounded(text, loader)
+    except YamlLimitError as exc:
+        where = Location(path, exc.line, exc.column) if exc.line else Location(path, 0, 0)
+        raise SceFormatError(f"not a usable .sce file: {exc}", where) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         location = Location(path, mark.line + 1, mark.column + 1) if mark is not None else None

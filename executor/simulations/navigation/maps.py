@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import yaml
 
+from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 from executor.simulations import engines
 from executor.simulations.navigation.images import ImageError, read_grey_image
 
@@ -114,8 +115,8 @@ def load_map(path: Path) -> OccupancyMap:
     if path.stat().st_size > MAX_MAP_YAML_BYTES:
         raise MapError(f"{path}: larger than {MAX_MAP_YAML_BYTES} bytes")
     try:
-        spec = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        spec = load_bounded(path.read_text(encoding="utf-8"), yaml.SafeLoader)
+    except (yaml.YAMLError, UnicodeDecodeError, YamlLimitError) as exc:
         raise MapError(f"{path}: not YAML: {exc}") from None
     if not isinstance(spec, dict):
         raise MapError(f"{path}: expected a mapping with image, resolution and origin")

@@ -1,0 +1,111 @@
+"""Bounded YAML: every YAML file we read is limited in size and in what its aliases expand to.
+
+PyYAML shares the node of an alias (``*a``) with its anchor, so a few lines of nested aliases
+("billion laughs") load quickly into a small object graph that is exponentially large once anything
+walks or copies it as a tree: printing it, merging it into a model, writing it as JSON. A
+parameter file of nine such lines grew a run past 3 GB. So before a document is constructed we
+count the nodes it stands for with every alias expanded (linear time: a node's expanded size is
+computed once) and refuse one that stands for more than :data:`MAX_EXPANDED_NODES`.
+
+Limits (documented in docs/security.md):
+
+- :data:`MAX_YAML_BYTES`: a YAML file we read (parameter file, ``.sce``, coverage plan) is at most
+  64 MiB of text;
+- :data:`MAX_EXPANDED_NODES`: one document stands for at most a million scalars, sequences and
+  mappings once its aliases are expanded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import yaml
+
+#: Largest YAML text read, in bytes.
+MAX_YAML_BYTES = 64 * 1024 * 1024
+#: Most nodes a document may stand for with its aliases expanded.
+MAX_EXPANDED_NODES = 1_000_000
+
+
+class YamlLimitError(ValueError):
+    """A YAML text beyond one of the limits; ``line`` and ``column`` are 1-based (0: the whole file)."""
+
+    def __init__(self, message: str, line: int = 0, column: int = 0) -> None:
+        super().__init__(message)
+        self.line = line
+        self.column = column
+
+
+def check_size(text: str | bytes) -> None:
+    """Refuse a text larger than :data:`MAX_YAML_BYTES`."""
+    if len(text) > MAX_YAML_BYTES:
+        raise YamlLimitError(f"larger than the limit of {MAX_YAML_BYTES // (1024 * 1024)} MiB for a YAML file")
+
+
+def check_expansion(root: yaml.Node | None) -> None:
+    """Refuse a document whose aliases expand to more than :data:`MAX_EXPANDED_NODES` nodes."""
+    if root is None:
+        return
+    sizes: dict[int, int] = {}
+    # Iterative post-order walk: a deeply nested document must not exhaust the Python stack either.
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, children_done = stack.pop()
+        key = id(node)
+        if key in sizes and not children_done:
+            continue
+        children = _children(node)
+        if not children_done:
+            sizes.setdefault(key, -1)        # on the path: a recursive alias counts once
+            stack.append((node, True))
+            stack.extend((child, False) for child in children if id(child) not in sizes)
+            continue
+        total = 1 + sum(max(sizes.get(id(child), 1), 1) for child in children)
+        if total > MAX_EXPANDED_NODES:
+            mark = node.start_mark
+            raise YamlLimitError(
+                f"this YAML stands for more than {MAX_EXPANDED_NODES:,} values once its aliases (*name) are "
+                "expanded; refusing it (an alias bomb?)", mark.line + 1, mark.column + 1)
+        sizes[key] = total
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [part for pair in node.value for part in pair]
+    return []
+
+
+def load_all_bounded(text: str, loader_class: Any) -> Iterator[Any]:
+    """``yaml.load_all`` with the limits: each document is checked before it is constructed."""
+    check_size(text)
+    loader = loader_class(text)
+    try:
+        while loader.check_node():
+            node = loader.get_node()
+            check_expansion(node)
+            yield loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def load_bounded(text: str, loader_class: Any) -> Any:
+    """``yaml.load`` (one document) with the limits."""
+    check_size(text)
+    loader = loader_class(text)
+    try:
+        node = loader.get_single_node()
+        check_expansion(node)
+        return loader.construct_document(node) if node is not None else None
+    finally:
+        loader.dispose()
+
+
+def compose_bounded(text: str, loader_class: Any = yaml.SafeLoader) -> yaml.Node | None:
+    """``yaml.compose`` (one document) with the limits."""
+    check_size(text)
+    node = yaml.compose(text, Loader=loader_class)
+    check_expansion(node)
+    return node

@@ -131,7 +131,7 @@ def _case(result: ScenarioResult, names: ReportNames) -> Case:
         return Case(name, classname, result.duration, "skipped", message=result.message or "not run")
     if not result.passed:
         message = result.message or "failed"
-        return Case(name, classname, result.duration, "failure", message=message,
+        return Case(name, classname, result.duration, "error" if result.error else "failure", message=message,
                     text=failure_text(message, result.output))
     return Case(name, classname, result.duration)
 

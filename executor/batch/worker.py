@@ -37,6 +37,22 @@ _TICK = 0.2
 _GIVE_UP_AFTER_STOP = 30.0
 
 
+def prepare_job_folder(root: Path, folder: Path) -> None:
+    """Create a job's folder under the output root, refusing one that leads elsewhere.
+
+    A symbolic link planted where a job's folder goes (``results/cut4 -> /home/me``) would make the
+    job write its log and results through it; so would a link among the root's own subfolders. The
+    folder must be a real directory whose real path lies inside the root's real path.
+    """
+    root.mkdir(parents=True, exist_ok=True)
+    if folder.is_symlink():
+        raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
+    folder.mkdir(parents=True, exist_ok=True)
+    real_root, real = os.path.realpath(root), os.path.realpath(folder)
+    if real != real_root and not real.startswith(real_root.rstrip(os.sep) + os.sep):
+        raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
+
+
 @dataclass
 class WorkerSettings:
     """How a worker runs: parallel slots, which batches, lease length, where outputs go."""
@@ -253,6 +269,7 @@ class Worker:
         began = time.time()
         problem: str | None = None
         try:
+            prepare_job_folder(root, output_dir)
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise

@@ -67,7 +67,7 @@ def _check_options(request: ExecutionRequest) -> None:
             raise UsageProblem(f"--post-run '{hook}': '{program}' is not an executable file or command")
 
 
-def _load(request: ExecutionRequest, logger: Logger):
+def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None):
     """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``.
 
     A parameter-file error without a location is pointed at the file (at the key, when the message
@@ -90,7 +90,7 @@ def _load(request: ExecutionRequest, logger: Logger):
     loaded = []
     for index, document in enumerate(documents):
         try:
-            overrides, dirs = split_output_dirs(document)
+            overrides, dirs = split_output_dirs(document, output_root)
             loaded.append((load_scenario_file(request.scenario, overrides), dirs))
         except ParameterFileError as exc:
             if path and exc.location is None:
@@ -142,7 +142,7 @@ def execute(request: ExecutionRequest) -> int:
             os.remove(stale)
 
     try:
-        loaded = _load(request, logger)
+        loaded = _load(request, logger, output_root)
         from executor.actions.registry import check_actions_available
 
         check_actions_available(s for scenario_file, _ in loaded for s in scenario_file.scenarios)

@@ -33,11 +33,19 @@ class PlannedRun:
         return f"PlannedRun({self.name!r}, output_dir={self.output_dir!r})"
 
 
-def split_output_dirs(document: Mapping | None) -> tuple[dict | None, dict[str, str]]:
+#: Longest path (bytes) and path component accepted for an ``_output_dir`` (Linux's PATH_MAX and NAME_MAX).
+MAX_PATH_BYTES = 4095
+MAX_NAME_BYTES = 255
+
+
+def split_output_dirs(document: Mapping | None,
+                      output_root: str | None = None) -> tuple[dict | None, dict[str, str]]:
     """Take ``_output_dir`` out of each scenario's mapping: ``(overrides for the resolver, dirs)``.
 
-    Raises :class:`ParameterFileError` when ``_output_dir`` is not a non-empty string or escapes
-    the output directory.
+    Raises :class:`ParameterFileError` when ``_output_dir`` is not a non-empty string, cannot be a
+    folder (a NUL byte, too long, under a file) or escapes the output directory, also through a
+    symbolic link inside it (checked on the real path, when ``output_root`` is given). Every
+    document is checked before the first run, so a bad folder in the last document runs nothing.
     """
     if document is None:
         return None, {}
@@ -58,9 +66,35 @@ def split_output_dirs(document: Mapping | None) -> tuple[dict | None, dict[str, 
                     raise ParameterFileError(
                         f"'{scenario_name}.{OUTPUT_DIR_KEY}': '{target}' leaves the output directory; "
                         "use a path inside it, or an absolute path")
+            _check_folder(f"{scenario_name}.{OUTPUT_DIR_KEY}", target, output_root)
             dirs[str(scenario_name)] = target
         overrides[scenario_name] = values
     return overrides, dirs
+
+
+def _check_folder(key: str, target: str, output_root: str | None) -> None:
+    """Refuse an ``_output_dir`` that cannot be a folder or that leads out of ``output_root``."""
+    if "\0" in target:
+        raise ParameterFileError(f"'{key}': the path holds a NUL character, which no file system allows")
+    encoded = os.fsencode(target)
+    if len(encoded) > MAX_PATH_BYTES or any(len(part) > MAX_NAME_BYTES for part in encoded.split(b"/")):
+        raise ParameterFileError(f"'{key}': the path is too long ({len(encoded)} bytes; at most "
+                                 f"{MAX_PATH_BYTES}, and {MAX_NAME_BYTES} per folder name)")
+    if output_root is None and not os.path.isabs(target):
+        return
+    root = os.path.abspath(output_root) if output_root is not None else ""
+    folder = os.path.normpath(target if os.path.isabs(target) else os.path.join(root, target))
+    if not os.path.isabs(target):
+        real_root, real = os.path.realpath(root), os.path.realpath(folder)
+        if real != real_root and not real.startswith(real_root.rstrip(os.sep) + os.sep):
+            raise ParameterFileError(
+                f"'{key}': '{target}' leads out of the output directory through a symbolic link "
+                f"(to {real}); use a path inside it, or an absolute path")
+    existing = folder
+    while not os.path.lexists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        raise ParameterFileError(f"'{key}': '{target}' cannot be a folder: {existing} is a file")
 
 
 def plan_runs(loaded: Sequence[tuple[ScenarioFile, Mapping[str, str]]], output_root: str | None) -> list[PlannedRun]:

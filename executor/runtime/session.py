@@ -101,7 +101,16 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                     return outcome
             for run in runs:
                 if run.output_dir:
-                    os.makedirs(run.output_dir, exist_ok=True)
+                    try:
+                        os.makedirs(run.output_dir, exist_ok=True)
+                    except (OSError, ValueError) as exc:   # this run cannot run; the others still do
+                        reason = getattr(exc, "strerror", None) or str(exc)
+                        message = f"cannot create the output directory {run.output_dir!r}: {reason}"
+                        logger.error(f"Scenario '{run.name}' not run: {message}")
+                        results.append(ScenarioResult(run.name, False, message, output_dir=None, error=True))
+                        if on_result is not None:
+                            on_result(results)
+                        continue
                 external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
                 if simulation is not None:
                     failure = _reset_simulation(simulation, run)

@@ -1,0 +1,43 @@
+"""Placeholders are substituted once, and shell-quoted inside ``sh -c`` scripts (issue 21 item 4)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
+
+from executor.batch.inputs import substitute
+
+
+def test_a_value_is_never_searched_for_placeholders_again():
+    argv = substitute(["run", "{SCENARIO}", "{OUTPUT_DIR}"], "in{OUTPUT_DIR}/a.osc", "res/a")
+    assert argv == ["run", "in{OUTPUT_DIR}/a.osc", "res/a"]
+    assert substitute(["x", "--out={OUTPUT_DIR}"], "{OUTPUT_DIR}.osc", "o") == ["x", "--out=o"]
+
+
+def test_values_in_a_shell_script_are_quoted_and_elsewhere_passed_as_they_are():
+    name = "a;touch x;b.osc"
+    assert substitute(["sh", "-c", "run {SCENARIO} > {OUTPUT_DIR}/log"], name, "res/a b") == [
+        "sh", "-c", "run 'a;touch x;b.osc' > 'res/a b'/log"]
+    assert substitute(["/bin/bash", "-ec", "run {SCENARIO}"], name, "o")[2] == "run 'a;touch x;b.osc'"
+    assert substitute(["python3", "-c", "print('{SCENARIO}')"], name, "o")[2] == "print('a;touch x;b.osc')"
+    assert substitute(["sh", "script.sh", "{SCENARIO}"], name, "o") == ["sh", "script.sh", name]
+
+
+def test_a_scenario_named_like_shell_code_does_not_run_it(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a;touch pwned;b": "xml=pass"})
+    script = " ".join(child_command(child)[:3]).replace("{SCENARIO}", "") + " {SCENARIO} {OUTPUT_DIR}"
+    done = run_cli(["-i", "in", "-o", "results", "--", "sh", "-c", script], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert not (tmp_path / "pwned").exists()
+    assert not (Path.cwd() / "pwned").exists()
+
+
+def test_a_folder_named_with_a_placeholder_runs_its_own_files(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in{OUTPUT_DIR}", {"one": "xml=pass"})
+    done = run_cli(["-i", "in{OUTPUT_DIR}", "-o", "results", "--", *child_command(child)], tmp_path,
+                   cli_env(tmp_path))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert (tmp_path / "results" / "one" / "test.xml").is_file()

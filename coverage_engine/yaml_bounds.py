@@ -109,3 +109,37 @@ def compose_bounded(text: str, loader_class: Any = yaml.SafeLoader) -> yaml.Node
     node = yaml.compose(text, Loader=loader_class)
     check_expansion(node)
     return node
+
+
+class DuplicateKeyError(YamlLimitError):
+    """A key written twice in one mapping (PyYAML alone keeps the last one silently)."""
+
+
+_UNIQUE_LOADERS: dict[type, type] = {}
+
+
+def with_unique_keys(loader_class: Any) -> Any:
+    """A subclass of ``loader_class`` that refuses a key written twice in one mapping."""
+    if loader_class in _UNIQUE_LOADERS:
+        return _UNIQUE_LOADERS[loader_class]
+
+    class UniqueKeys(loader_class):  # type: ignore[misc, valid-type]
+        def construct_mapping(self, node: yaml.Node, deep: bool = False) -> Any:
+            if isinstance(node, yaml.MappingNode):
+                seen: dict[Any, yaml.Node] = {}
+                for key_node, _value in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue
+                    key = self.construct_object(key_node, deep=True)
+                    try:
+                        first = seen.setdefault(key, key_node)
+                    except TypeError:       # an unhashable key: PyYAML reports it
+                        continue
+                    if first is not key_node:
+                        mark = key_node.start_mark
+                        raise DuplicateKeyError(f"duplicate key '{key}' (first at line {first.start_mark.line + 1})",
+                                                mark.line + 1, mark.column + 1)
+            return super().construct_mapping(node, deep=deep)
+
+    _UNIQUE_LOADERS[loader_class] = UniqueKeys
+    return UniqueKeys

@@ -75,6 +75,9 @@ _REQUIRED = {
     "model": str,
 }
 
+#: Keys a ``.sce`` file may have besides the required ones.
+_OPTIONAL = ("index", "parameters")
+
 #: Characters a YAML literal block cannot carry unchanged: anything but tab, line feed and printable
 #: characters, and the printable ones YAML reads as line breaks (NEL, LS, PS) or as a byte order mark.
 _BLOCK_UNSAFE = re.compile("[^\t\n\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|[\x85\u2028\u2029\ufeff]")
@@ -282,11 +285,13 @@ def is_sce_text(head: str) -> bool:
 def _load_yaml(text: str, path: str):
     import yaml
 
-    from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
+    from coverage_engine.yaml_bounds import DuplicateKeyError, YamlLimitError, load_bounded, with_unique_keys
 
-    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    loader = with_unique_keys(getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     try:
         return load_bounded(text, loader)
+    except DuplicateKeyError as exc:
+        raise SceFormatError(f"malformed .sce file: {exc}", Location(path, exc.line, exc.column)) from None
     except YamlLimitError as exc:
         where = Location(path, exc.line, exc.column) if exc.line else Location(path, 0, 0)
         raise SceFormatError(f"not a usable .sce file: {exc}", where) from None
@@ -377,7 +382,13 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     padded = "\n" * (first - 1) + model if first > 0 else model
     base = Path(path).parent if path and not path.startswith("<") else Path.cwd()
     source_dir = str((base / data["source_dir"]).resolve()) if data["source_dir"] else str(base.resolve())
-    extra = {k: v for k, v in data.items() if k not in _REQUIRED and k not in ("parameters", "index")}
+    unknown = [k for k in data if k not in _REQUIRED and k not in _OPTIONAL]
+    if unknown:
+        key = str(unknown[0])
+        known = ", ".join([*_REQUIRED, *_OPTIONAL])
+        raise SceFormatError(f"malformed .sce file: unknown key '{key}' (a .sce file has {known})",
+                             Location(path, _line_of_key(text, key), 1))
+    extra: dict = {}
     return SceDocument(
         text=padded, source_dir=source_dir, scenario=scenario, assignment=dict(data["assignment"]),
         format_version=version, source=data["source"], source_sha256=data["source_sha256"],

@@ -37,15 +37,20 @@ def debug_option(func: F) -> F:
                         help="Debug output, and tracebacks of errors.")(func)
 
 
+#: Longest duration any option accepts: a year. Timers are threads' waits, which fail beyond
+#: ``threading.TIMEOUT_MAX`` (``--timeout 1e308`` crashed the timer thread); no run needs more.
+MAX_SECONDS = 365 * 24 * 3600.0
+
+
 class Seconds(click.ParamType):
-    """A finite number of seconds above 0, at least ``minimum`` and at most ``maximum`` when given.
+    """A finite number of seconds above 0, at least ``minimum`` and at most ``maximum`` (a year by default).
 
     ``nan`` and ``inf`` are refused: they would silently disable a limit (``nan`` compares false to all).
     """
 
     name = "seconds"
 
-    def __init__(self, minimum: float | None = None, maximum: float | None = None) -> None:
+    def __init__(self, minimum: float | None = None, maximum: float | None = MAX_SECONDS) -> None:
         self.minimum = minimum
         self.maximum = maximum
 
@@ -61,5 +66,5 @@ class Seconds(click.ParamType):
         if self.minimum is not None and number < self.minimum:
             self.fail(f"must be at least {self.minimum:g} s (got {value})", param, ctx)
         if self.maximum is not None and number > self.maximum:
-            self.fail(f"must be at most {self.maximum:g} s (got {value})", param, ctx)
+            self.fail(f"must be at most {self.maximum:.10g} s (got {value})", param, ctx)
         return number

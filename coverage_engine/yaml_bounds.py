@@ -123,7 +123,7 @@ def with_unique_keys(loader_class: Any) -> Any:
     if loader_class in _UNIQUE_LOADERS:
         return _UNIQUE_LOADERS[loader_class]
 
-    class UniqueKeys(loader_class):  # type: ignore[misc, valid-type]
+    class UniqueKeys(loader_class):
         def construct_mapping(self, node: yaml.Node, deep: bool = False) -> Any:
             if isinstance(node, yaml.MappingNode):
                 seen: dict[Any, yaml.Node] = {}

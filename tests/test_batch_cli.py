@@ -106,7 +106,7 @@ def test_exit_codes_usage_2_runtime_1(tmp_path):
         ["-o", "r", "--resume", "--", "true", "no-placeholders"],
     ]
     for option in ("--timeout", "--grace", "--lease"):
-        for value in ("nan", "inf", "-inf", "0", "-1", "soon"):
+        for value in ("nan", "inf", "-inf", "0", "-1", "soon", "1e308", "31536001"):
             usage.append(["-i", "in", "-o", "r", option, value, "--", *cmd])
     for option in ("--lease", "--poll"):
         for value in ("nan", "inf", "0"):
@@ -125,6 +125,12 @@ def test_exit_codes_usage_2_runtime_1(tmp_path):
         assert len(lines) == 1 and "error" in lines[0] and "Traceback" not in lines[0], (args, result.stderr)
     assert not (tmp_path / "ledger.txt").exists()        # nothing ran
     assert "afile is not a folder" in run_cli(runtime[3], tmp_path).stderr
+
+
+def test_an_endless_timeout_is_bounded_to_a_year(tmp_path):
+    result = _batch(tmp_path, {"a": ""}, "--timeout", "1e308")
+    assert result.returncode == 2
+    assert result.stderr.strip().endswith("Invalid value for '--timeout': must be at most 31536000 s (got 1e308)")
 
 
 def test_non_finite_timeout_is_refused_not_applied(tmp_path):

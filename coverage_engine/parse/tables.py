@@ -44,7 +44,17 @@ def _build(grammar_text: str) -> Tables:
     from lark import Lark
 
     lark_parser = Lark(grammar_text, parser="lalr", keep_all_tokens=True, maybe_placeholders=False)
-    table = lark_parser.parser.parser._parse_table
+    # lark has no public accessor for its LALR table; this attribute path is stable across the lark
+    # releases pyproject.toml admits (tested in CI with the newest of them). Another lark fails here,
+    # with a message, rather than anywhere later.
+    try:
+        table = lark_parser.parser.parser._parse_table
+        table.states, table.start_states, table.end_states  # noqa: B018 - the parts read below
+    except AttributeError as exc:
+        import lark
+
+        raise RuntimeError(f"lark {getattr(lark, '__version__', '?')} is not supported: its LALR table is not where "
+                           "lark 1.1.9 to 1.3 keep it; install a release pyproject.toml admits") from exc
     rule_index: dict[object, int] = {}
     rules: list[tuple[str, str, int, bool, tuple[bool, ...] | None]] = []
     states: dict[int, dict[str, tuple[bool, int]]] = {}

@@ -140,8 +140,9 @@ def results_xml(results: Sequence[ScenarioResult], names: ReportNames | None = N
     """The ``test.xml`` text for ``results``."""
     names = names or ReportNames.plain()
     starts = [r.start_time for r in results if r.start_time]
+    properties = {key: value for r in results for key, value in getattr(r, "properties", {}).items()}
     suite = suite_element(names.suite, [_case(r, names) for r in results],
-                          timestamp=iso_timestamp(min(starts)) if starts else None)
+                          timestamp=iso_timestamp(min(starts)) if starts else None, properties=properties or None)
     return document([suite])
 
 

@@ -14,7 +14,7 @@ class ScenarioResult:
     """
 
     __slots__ = ("name", "passed", "message", "output", "duration", "start_time", "output_dir", "aborted",
-                 "skipped", "error")
+                 "skipped", "error", "properties")
 
     def __init__(self, name: str, passed: bool, message: str = "", output: str = "", duration: float = 0.0,
                  start_time: float = 0.0, output_dir: str | None = None, aborted: bool = False,
@@ -29,6 +29,8 @@ class ScenarioResult:
         self.aborted = aborted
         self.skipped = skipped
         self.error = error
+        #: JUnit properties of the run (one per coverage item sampled), added to its suite's.
+        self.properties: dict[str, str] = {}
 
     def __repr__(self) -> str:
         state = "passed" if self.passed else f"{'skipped' if self.skipped else 'failed'}: {self.message}"

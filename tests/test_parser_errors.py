@@ -45,8 +45,7 @@ def test_inconsistent_dedent_has_a_position():
 
 
 @pytest.mark.parametrize(("text", "feature", "line", "column"), [
-    ("scenario t:\n    cover()\n    do log('x')\n", "cover()", 2, 5),
-    ("scenario t:\n    record(speed)\n", "record()", 2, 5),
+    ("scenario t:\n    do serial:\n        cover(x)\n", "cover() in a behaviour", 3, 9),
     ("struct b:\n    p: int = 1 with:\n        remove_default(it.p)\n", "remove_default()", 3, 9),
     ("scenario t:\n    var x: time = sample(a.b, @e.start)\n", "sample()", 2, 19),
     ("global t: float = range(0, 1)\n", "range()", 1, 19),

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import pytest
 
-from coverage_engine.errors import UnsupportedFeatureError
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.parser import parse_file, parse_text
 
@@ -158,9 +157,4 @@ def test_libraries_and_examples_parse(tmp_path):
     files = sorted((root / "coverage_engine" / "osc").glob("*.osc")) + sorted((root / "examples").rglob("*.osc"))
     assert files
     for f in files:
-        if "    cover(" in f.read_text(encoding="utf-8"):
-            # written for cover(), which is still to come: when it parses, drop this branch
-            with pytest.raises(UnsupportedFeatureError, match=r"cover\(\)"):
-                parse_file(f)
-            continue
         parse_file(f)

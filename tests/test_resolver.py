@@ -245,8 +245,8 @@ def test_relative_import_and_unknown_library(tmp_path):
 
 EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples").rglob("*.osc")
                   if "build" not in p.parts)
-#: examples written for language support that is still to come (cover(), range keeps, --strategy lhs)
-AWAITING = pytest.mark.xfail(strict=True, reason="needs cover()/record(), range keeps and --strategy lhs")
+#: examples written for language support that is still to come (range keeps, --strategy lhs)
+AWAITING = pytest.mark.xfail(strict=True, reason="needs range keeps ([low..high]) and --strategy lhs")
 
 
 @pytest.mark.parametrize("path", [pytest.param(p, marks=AWAITING) if "    cover(" in p.read_text(encoding="utf-8")

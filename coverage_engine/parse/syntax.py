@@ -187,7 +187,17 @@ class ModifierInvocation(Record):
     location: Location
 
 
-WithMember = KeepConstraint | ModifierInvocation
+@record
+class CoverageDecl(Record):
+    """``cover(...)`` or ``record(...)`` (ASAM OpenSCENARIO DSL 2, coverage): a member of a scenario or a
+    ``with:`` block of one of its parameters; ``kind`` is ``"cover"`` or ``"record"``."""
+
+    kind: str
+    arguments: tuple[Argument, ...]
+    location: Location
+
+
+WithMember = KeepConstraint | ModifierInvocation | CoverageDecl
 
 
 @record

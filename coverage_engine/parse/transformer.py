@@ -16,6 +16,9 @@ from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
 from coverage_engine.parse.transformer_expr import BehaviorExpressionRules
 
+#: Member statements that declare coverage items rather than apply a modifier.
+COVERAGE_MEMBERS = ("cover", "record")
+
 
 class SyntaxBuilder(BehaviorExpressionRules):
     """Callbacks for the declaration rules; expressions and behaviours come from the mixin."""
@@ -231,8 +234,10 @@ class SyntaxBuilder(BehaviorExpressionRules):
 
     def modifier_call(self, children):
         name = children[0]
-        self.check_call_name(name)
         arguments = children[2] if isinstance(children[2], tuple) else ()
+        if len(name.parts) == 1 and name.parts[0] in COVERAGE_MEMBERS:
+            return s.CoverageDecl(name.parts[0], arguments, self.loc(children))
+        self.check_call_name(name)
         return s.ModifierInvocation(name, arguments, self.loc(children))
 
     def until_stmt(self, children):

@@ -20,7 +20,11 @@ from coverage_engine.records import replace
 
 # Names the reference reserves for features we do not implement; written like a call they would
 # otherwise parse as an ordinary modifier/behaviour invocation or function call.
-UNSUPPORTED_STATEMENTS = {"cover": "cover()", "record": "record()", "remove_default": "remove_default()"}
+UNSUPPORTED_STATEMENTS = {"cover": "cover() in a behaviour (it is a member of a scenario or of a parameter's "
+                                   "'with:' block)",
+                          "record": "record() in a behaviour (it is a member of a scenario or of a parameter's "
+                                    "'with:' block)",
+                          "remove_default": "remove_default()"}
 UNSUPPORTED_EXPR_CALLS = {
     "sample": "sample()", "range": "range() (write [low..high] instead)",
     "rise": "rise()", "fall": "fall()", "every": "every()",

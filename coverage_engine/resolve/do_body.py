@@ -69,6 +69,8 @@ def _composite(node: syntax.Composite, scope: Scope) -> model.Behavior:
     for extra in node.with_members:
         if isinstance(extra, syntax.KeepConstraint):
             raise ResolveError(f"'keep' cannot constrain a '{node.kind}'", extra.location)
+        if isinstance(extra, syntax.CoverageDecl):
+            raise _coverage_misplaced(extra)
         modifiers.append(extra)
     composite = model.Composite(node.kind, node.label or node.kind, tuple(children), node.location)
     return apply_modifiers(composite, modifiers, scope)
@@ -160,6 +162,8 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         if isinstance(member, syntax.ModifierInvocation):
             modifiers.append(member)
             continue
+        if isinstance(member, syntax.CoverageDecl):
+            raise _coverage_misplaced(member)
         keep = extract_keep(member, scope)
         if len(keep.path) != 1 or keep.path[0] not in action.fields:
             if not keep.path:
@@ -231,3 +235,8 @@ def _emit(node: syntax.Emit, scope: Scope) -> model.Behavior:
         raise NameLookupError(f"unknown event '{node.event}'", node.location)
     return model.EmitEvent(node.label or f"emit {node.event}", scope.events[node.event], node.location)
 
+
+
+def _coverage_misplaced(decl: syntax.CoverageDecl) -> ResolveError:
+    return ResolveError(f"{decl.kind}() is a member of a scenario (or of a parameter's 'with:' block), not of a "
+                        "behaviour's 'with:' block", decl.location)

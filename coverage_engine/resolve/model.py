@@ -246,6 +246,36 @@ class Parameter(Record):
 
 
 @record
+class CoverageItem(Record):
+    """A ``cover()`` or ``record()`` item of a scenario, ready to sample.
+
+    ``expression`` gives the value (in SI base units for a physical type; ``unit_factor`` and
+    ``unit_offset`` turn it into ``unit``); None for a cross, whose ``items`` name cover items of the
+    same scenario. ``value_kind`` is ``int``, ``float``, ``bool``, ``string`` or ``enum`` (``members``
+    then lists its members). ``event`` is when it is sampled: ``end`` (only when the scenario passes),
+    ``finish`` (every run, passed or failed) or a scenario event's name. A sample for which
+    ``ignore`` is true is counted as ignored.
+    """
+
+    kind: str
+    name: str
+    expression: Expr | None
+    value_kind: str
+    members: tuple[str, ...]
+    unit: str | None
+    unit_factor: float
+    unit_offset: float
+    range: tuple[float, float] | None
+    every: float | None
+    event: str
+    text: str | None
+    ignore: Expr | None
+    ignore_text: str | None
+    items: tuple[str, ...]
+    location: Location
+
+
+@record
 class Scenario(Record):
     """One scenario ready to run. ``body`` already includes the scenario-level modifiers (``timeout(60s)``)."""
 
@@ -256,6 +286,7 @@ class Scenario(Record):
     events: tuple[str, ...]
     body: Behavior | None
     location: Location
+    coverage: tuple[CoverageItem, ...] = ()
 
     def parameter_values(self) -> dict[str, object]:
         """Parameter name → value, as injected into a simulation's ``reset``."""

@@ -139,6 +139,7 @@ def _fill(ns: Namespace, ctype: CompoundType, filled: set[int], stack: tuple[str
         ctype.methods = dict(parent.methods)
         ctype.keeps = list(parent.keeps)
         ctype.modifiers = list(parent.modifiers)
+        ctype.coverage = list(parent.coverage)
         ctype.body = parent.body
     filled.add(id(ctype))
     if len(decl.name.parts) > 1:
@@ -162,6 +163,10 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
             for name in member.names:
                 ctype.fields[name] = FieldDecl(name, ftype, member.default, member.with_members, ctype,
                                                member.location)
+                for item in member.with_members:
+                    if isinstance(item, syntax.CoverageDecl):
+                        _check_coverage_owner(ctype, item)
+                        ctype.coverage.append((item, name))
         elif isinstance(member, syntax.VariableDecl):
             vtype = ns.lookup_type(member.type)
             for name in member.names:
@@ -174,6 +179,9 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
             ctype.keeps.append(member)
         elif isinstance(member, syntax.ModifierInvocation):
             ctype.modifiers.append(member)
+        elif isinstance(member, syntax.CoverageDecl):
+            _check_coverage_owner(ctype, member)
+            ctype.coverage.append((member, None))
         elif isinstance(member, syntax.DoDirective):
             if ctype.kind not in ("scenario", "action"):
                 raise ResolveError(f"a {ctype.kind} cannot have a 'do' body", member.location)
@@ -184,3 +192,11 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
                 raise ResolveError(f"{ctype.kind} '{ctype.name}' already has a 'do' body "
                                    f"(line {ctype.body.location.line})", member.location)
             ctype.body = member
+
+
+def _check_coverage_owner(ctype: CompoundType, decl: syntax.CoverageDecl) -> None:
+    """cover()/record() are sampled per scenario run; in an actor, struct or action they are refused (for now)."""
+    if ctype.kind != "scenario":
+        raise UnsupportedFeatureError(f"not supported: {decl.kind}() in {ctype.kind} '{ctype.qualified}' (declare it "
+                                      f"in the scenario, with expression: naming the {ctype.kind}'s member)",
+                                      decl.location)

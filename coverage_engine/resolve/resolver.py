@@ -16,6 +16,7 @@ from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
 from coverage_engine.resolve.checks import check_declarations
+from coverage_engine.resolve.coverage_items import resolve_coverage
 from coverage_engine.resolve.do_body import apply_modifiers, resolve_behavior
 from coverage_engine.resolve.imports import collect_units
 from coverage_engine.resolve.namespace import build_namespace
@@ -54,6 +55,8 @@ def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], 
              overrides: Mapping | None) -> model.ScenarioFile:
     namespace = build_namespace(units, unit)
     ctx = ResolveContext(namespace)
+    ctx.texts = {u.file: u.text for u in units}
+    ctx.texts[unit.file] = unit.text
     for name in namespace.globals:
         global_value(ctx, name, namespace.globals[name].location)
     check_declarations(ctx, unit)
@@ -95,12 +98,13 @@ def _scenario(ctx: ResolveContext, stype: CompoundType, values: Mapping | None) 
         if body is None:
             raise ResolveError(f"scenario '{stype.name}' has modifiers but no 'do' body", location)
         body = apply_modifiers(body, stype.modifiers, scope)
+    coverage = resolve_coverage(stype, scope) if stype.coverage else ()
     parameters = tuple(
         model.Parameter(name, fdecl.type.name, names[name].value if names[name].is_const else None,
                         fdecl.location, not_overridable_reason(_info(fdecl), ctx) is None)
         for name, fdecl in stype.fields.items())
     return model.Scenario(stype.name, stype.declaration.location.file, parameters, tuple(ctx.variables),
-                          tuple(events.values()), body, location)
+                          tuple(events.values()), body, location, coverage)
 
 
 def _info(fdecl) -> FieldInfo:

@@ -73,6 +73,8 @@ class ResolveContext:
         self.counter = 0
         #: Types whose instance is being built right now, outermost first (to catch 'struct s: a: s').
         self.building: list[str] = []
+        #: Source text of each file, for quoting an expression as written (coverage items' ``ignore:``).
+        self.texts: dict[str, str] = {}
 
     def fresh_path(self, hint: str) -> str:
         """A unique key prefix for variables of an instance that has no name of its own."""

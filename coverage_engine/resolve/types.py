@@ -119,6 +119,8 @@ class CompoundType(OscType):
         self.methods: dict[str, syntax.MethodDecl] = {}
         self.keeps: list[syntax.KeepConstraint] = []
         self.modifiers: list[syntax.ModifierInvocation] = []
+        #: cover()/record() members, each with the parameter whose ``with:`` block holds it (None: a member)
+        self.coverage: list[tuple[syntax.CoverageDecl, str | None]] = []
         self.body: syntax.DoDirective | None = None
         self.behaviors: dict[str, CompoundType] = {}
 

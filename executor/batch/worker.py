@@ -17,7 +17,7 @@ import time
 from collections import Counter, deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 from executor.batch.builtin_runner import ForkServer, ForkServerError
 from executor.batch.job_run import Done, JobRun, Started, job_marker
@@ -26,9 +26,12 @@ from executor.batch.verdict import launch_failure
 from executor.batch.watchdog import Watchdog
 from executor.process import RUNNER_ENV, end_orphan_group
 from store.database import StoreError
-from store.jobs import Batch, Job, Reclaimed, WorkerIdentity
+from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
 from store.states import RETRYABLE, JobState
+
+if TYPE_CHECKING:
+    from store.coverage_records import CoverageRecords
 
 #: Longest wait between two looks at flags (Ctrl-C sets a flag; the loop notices within this time).
 _TICK = 0.2
@@ -101,6 +104,7 @@ class Worker:
     def __init__(self, store: QueueStore, settings: WorkerSettings, reporter: Reporter,
                  identity: WorkerIdentity | None = None) -> None:
         self.store = store
+        self._coverage_records: CoverageRecords | None = None
         self.settings = settings
         self.reporter = reporter
         self.identity = identity or WorkerIdentity.current()
@@ -410,6 +414,7 @@ class Worker:
                 retrying = self._claim_more = True
             else:
                 self.store.finish(job, result)
+                self._record_coverage(job, result)
                 self.summary.verdicts[result.status] += 1
                 if result.status is not JobState.PASSED and run.batch.options.halt_on_failure:
                     self._to_halt.add(run.batch.id)
@@ -419,6 +424,23 @@ class Worker:
             return
         self._runs.pop(job.id, None)           # the slot frees only once the result is in the store
         self.reporter.job_finished(job, result, retrying=retrying)
+
+    def _record_coverage(self, job: Job, result: JobResult) -> None:
+        """Keep the job's ``coverage.json`` (read on this host with its result) in the store, for reports
+        from any host; a file that does not validate is said and left out (the job's verdict stands)."""
+        if not result.coverage_json:
+            return
+        from coverage_engine.coverage.errors import RunFileError
+        from coverage_engine.coverage.run_file import parse_run_coverage, run_coverage_dict
+        from store.coverage_records import CoverageRecords
+
+        try:
+            if self._coverage_records is None:
+                self._coverage_records = CoverageRecords.attach(self.store.engine)
+            run = parse_run_coverage(result.coverage_json)
+            self._coverage_records.record(job.id, job.attempts, run_coverage_dict(run))
+        except RunFileError as exc:
+            self.reporter.warn(f"{job.name}: coverage.json not kept: {exc.render()}")
 
     def _halt(self, batch_id: int) -> None:
         if batch_id not in self._halted:

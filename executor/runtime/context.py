@@ -15,6 +15,7 @@ from coverage_engine.resolve.model import Expr, Scenario
 from executor.runtime.logger import Logger
 
 if TYPE_CHECKING:
+    from executor.runtime.coverage_sampling import CoverageSampler
     from executor.simulation import Clock
 
 
@@ -56,6 +57,8 @@ class ScenarioContext:
         self.variables: dict[str, object] = {}
         self.events: set[str] = set()
         self.processes: dict[str, list] = {}
+        #: The run's cover()/record() sampler (executor.runtime.coverage_sampling), when it has items.
+        self.coverage: CoverageSampler | None = None
 
     def init_variables(self, scenario: Scenario) -> None:
         """Give every ``var`` its initial value (in declaration order, so one may use another)."""

@@ -96,6 +96,8 @@ class EmitEvent(py_trees.behaviour.Behaviour):
         if self.event == "fail":
             raise ScenarioEnd(False, "emit fail", behaviour=self)
         self.context.events.add(self.event)
+        if self.context.coverage is not None:
+            self.context.coverage.on_event(self.event)
         return Status.SUCCESS
 
 

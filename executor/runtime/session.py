@@ -131,6 +131,8 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                                         simulation=simulation, observers=observers)
                 try:
                     results.append(runner.run())
+                    if context.coverage is not None:
+                        _write_coverage(context, results[-1], logger)
                 except RunAborted as aborted:
                     results.append(aborted.result)
                     outcome.aborted = aborted.signum
@@ -152,6 +154,20 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
         results.extend(ScenarioResult(r.name, False, NOT_STARTED, output_dir=r.output_dir, skipped=True)
                        for r in runs if r.name not in recorded)
     return outcome
+
+
+def _write_coverage(context: ScenarioContext, result: ScenarioResult, logger: Logger) -> None:
+    """Keep the run's samples: ``coverage.json`` in its folder, and one JUnit property per item sampled."""
+    sampler = context.coverage
+    assert sampler is not None
+    result.properties.update(sampler.properties())
+    if not context.output_dir:
+        return
+    verdict = "passed" if result.passed else "error" if result.error else "failed"
+    try:
+        sampler.write(context.output_dir, verdict, result.message, result.duration)
+    except Exception as exc:  # noqa: BLE001 - a sample the file cannot hold: say which, keep the run's verdict
+        logger.error(f"coverage of '{result.name}' not written: {exc}")
 
 
 def _reset_simulation(simulation, run: PlannedRun) -> ScenarioResult | None:

@@ -86,6 +86,10 @@ class ScenarioRunner:
     def _setup(self) -> None:
         context = self.context
         context.init_variables(self.scenario)
+        if self.scenario.coverage:
+            from executor.runtime.coverage_sampling import CoverageSampler
+
+            context.coverage = CoverageSampler(self.scenario, context.variables, run_name=self.name)
         self.root = build_tree(self.scenario, context)
         self.root.name = self.name
         kwargs = dict(self.setup_kwargs, logger=context.logger, input_dir=context.input_dir,
@@ -205,6 +209,11 @@ class ScenarioRunner:
             if not result.passed and self.root is not None and ticking:
                 result.output = snapshot(self.root)
             self._teardown()
+        if self.context.coverage is not None and ticking and not result.aborted:
+            try:
+                self.context.coverage.finish(result.passed)
+            except Exception as exc:  # noqa: BLE001 - an item's expression failed: say so, keep the verdict
+                logger.error(f"coverage of '{self.name}': {describe_error(exc)}")
         result.duration = time.monotonic() - start
         if result.passed:
             logger.info(f"Scenario '{self.name}' succeeded.")

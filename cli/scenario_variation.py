@@ -19,6 +19,9 @@ from cli.boundary import Boundary
 from cli.options import debug_option, store_option
 from executor.variation.generation import DEFAULT_MAX_VARIANTS, VariationRequest, VariationStoreError
 
+#: --strategy values (coverage_engine.variation.strategies.STRATEGIES; spelled here so -h imports nothing more).
+STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
+
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("-o", "-t", "--output-dir", default="out", show_default=True, type=click.Path(file_okay=False),
@@ -32,17 +35,30 @@ from executor.variation.generation import DEFAULT_MAX_VARIANTS, VariationRequest
               help="YAML file of scenario parameter values; each document is one more dimension.")
 @click.option("--max-variants", type=click.IntRange(min=1), default=DEFAULT_MAX_VARIANTS, show_default=True,
               metavar="N", help="Refuse to start when the file has more combinations than N.")
+@click.option("--strategy", type=click.Choice(STRATEGIES), default="full", show_default=True,
+              help="Which combinations: the full product, a covering array (pairwise, t-way) or a seeded "
+                   "sample (random, lhs, halton, sobol).")
+@click.option("--strength", type=click.IntRange(min=2), default=2, show_default=True, metavar="T",
+              help="t-way: every combination of values of any T dimensions appears in some variant.")
+@click.option("--samples", type=click.IntRange(min=1, max=10_000_000), metavar="N",
+              help="random/lhs/halton/sobol: how many variants to draw.")
+@click.option("--seed", type=click.IntRange(min=0, max=2**63 - 1), metavar="S",
+              help="Seed of pairwise/t-way/sampling (the same seed gives the same variants); chosen and printed "
+                   "when left out.")
 @click.argument("scenario", type=click.Path(dir_okay=False))
-def command(scenario, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants):
-    """Generate one concrete scenario (.sce) per combination of the values listed in SCENARIO (.osc).
+def command(scenario, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
+            strategy, strength, samples, seed):
+    """Generate concrete scenarios (.sce) from the values listed or ranged in SCENARIO (.osc).
 
-    Every keep(it.<param> in [v1, v2, ...]) is one dimension; the first varies slowest.
+    Every keep(it.<param> in [v1, v2, ...]) or keep(it.<param> in [low..high]) is one dimension; with the
+    default --strategy full every combination is written, the first dimension varying slowest.
     """
     from executor.variation.generation import run
 
     return run(VariationRequest(
         scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
-        log_model=log_model, debug=debug, store=store_url, max_variants=max_variants))
+        log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
+        strength=strength, samples=samples, seed=seed))
 
 
 def main(args: list[str] | None = None) -> None:

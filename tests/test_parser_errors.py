@@ -48,7 +48,6 @@ def test_inconsistent_dedent_has_a_position():
     ("scenario t:\n    do serial:\n        cover(x)\n", "cover() in a behaviour", 3, 9),
     ("struct b:\n    p: int = 1 with:\n        remove_default(it.p)\n", "remove_default()", 3, 9),
     ("scenario t:\n    var x: time = sample(a.b, @e.start)\n", "sample()", 2, 19),
-    ("global t: float = range(0, 1)\n", "range()", 1, 19),
     ("scenario t:\n    event e is every(1s)\n", "every()", 2, 16),
     ("scenario t:\n    on @e:\n        emit x\n", "on @event", 2, 5),
     ("scenario t:\n    do log() with:\n        until @e\n", "until", 3, 9),

@@ -245,12 +245,7 @@ def test_relative_import_and_unknown_library(tmp_path):
 
 EXAMPLES = sorted(p for p in (Path(__file__).resolve().parent.parent / "examples").rglob("*.osc")
                   if "build" not in p.parts)
-#: examples written for language support that is still to come (range keeps, --strategy lhs)
-AWAITING = pytest.mark.xfail(strict=True, reason="needs range keeps ([low..high]) and --strategy lhs")
-
-
-@pytest.mark.parametrize("path", [pytest.param(p, marks=AWAITING) if "    cover(" in p.read_text(encoding="utf-8")
-                                  else p for p in EXAMPLES], ids=[p.name for p in EXAMPLES])
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_every_example_parses_and_resolves(path, tmp_path):
     """Concrete examples resolve as they are; abstract ones (``keep(… in […])``) through their variants."""
     from coverage_engine.parse.parser import parse_file
@@ -261,7 +256,9 @@ def test_every_example_parses_and_resolves(path, tmp_path):
     if "in [" in unit.text and "keep(" in unit.text:
         with pytest.raises(UnsupportedFeatureError, match="scenario_variation"):
             load_scenario_file(path)
-        done = subprocess.run(["scenario_variation", str(path), "-o", str(tmp_path / "out"),
+        # a continuous range ([1mps..12mps]) is drawn by a sampler; listed values make the full product
+        strategy = ["--strategy", "lhs", "--samples", "4", "--seed", "1"] if ".." in unit.text else []
+        done = subprocess.run(["scenario_variation", str(path), "-o", str(tmp_path / "out"), *strategy,
                                "--store", f"sqlite:///{tmp_path / 'store.db'}"], capture_output=True, text=True)
         assert done.returncode == 0, done.stdout + done.stderr
         variants = sorted((tmp_path / "out").glob("*.sce"))

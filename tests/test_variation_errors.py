@@ -26,8 +26,9 @@ def run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize("right, message", [
     ("[]", "empty value list"),
-    ("[1..5]", "ranges are not variation dimensions (list the values"),
+    ("[1.0..5.0]", "'test.log.msg' is a continuous range (1.0..5.0): --strategy full needs listed values"),
     ("'abc'", "the right side of 'in' must be a list of values"),
+    ("[1..2.5kph]", "the ends of a range must be written in one unit"),
 ])
 def test_an_in_that_is_no_dimension_is_an_error_at_its_position(tmp_path, right, message):
     (tmp_path / "e.osc").write_text("import osc.helpers\n\nscenario test:\n    do serial:\n        log() with:\n"

@@ -26,7 +26,7 @@ UNSUPPORTED_STATEMENTS = {"cover": "cover() in a behaviour (it is a member of a 
                                     "'with:' block)",
                           "remove_default": "remove_default()"}
 UNSUPPORTED_EXPR_CALLS = {
-    "sample": "sample()", "range": "range() (write [low..high] instead)",
+    "sample": "sample()",
     "rise": "rise()", "fall": "fall()", "every": "every()",
 }
 BINARY_PRECEDENCE = {

@@ -206,6 +206,9 @@ def _call(expr: syntax.Call, scope: Scope) -> TypedExpr:
             return construct(ctx, ctype, expr.arguments, scope, expr.location)
         if callee.name == "elapsed":
             raise ResolveError("'elapsed(...)' can only follow 'wait'", expr.location)
+        if callee.name == "range":
+            raise UnsupportedFeatureError("range(...) is a set of values: it stands on the right of "
+                                          "'keep(x in range(...))', which scenario_variation expands", expr.location)
         raise NameLookupError(f"unknown function or struct '{callee.name}'", callee.location)
     if isinstance(callee, syntax.MemberAccess):
         method, owner = _method_of(callee, scope)

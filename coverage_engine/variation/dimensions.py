@@ -7,8 +7,13 @@ A dimension is one such constraint in a scenario:
 * ``keep(<param> in [...])`` among a scenario's members, and ``keep(it[.<member>] in [...])`` in the
   ``with:`` block of a scenario parameter (``param1: test_struct with: keep(it.member2 in [...])``).
 
-Only a literal list (``ListExpr``) of at least one value makes a dimension; any other ``in`` there
-(a range ``[1..5]``, an empty list, a string or a name on the right) is an error at its position. The finder reads the syntax tree and never resolves;
+A literal list (``ListExpr``) of at least one value makes a dimension, and so does a range of two
+literal ends (ASAM): ``[10kph..50kph]``, ``range(1m, 5m)``, an integer range ``[1..8]`` (the integers
+from 1 to 8) and a stepped range ``range(5, 60, 5)`` (5, 10, …, 60: the upper end is included when it
+falls on a step). Integer and stepped ranges are lists; a real range without a step is *continuous*
+(:class:`RangeSpec`, no choices yet): only the samplers of :mod:`coverage_engine.variation.strategies`
+can draw its values. Any other ``in`` there (an empty list, a string or a name on the right) is an
+error at its position. The finder reads the syntax tree and never resolves;
 each value keeps its exact source text (cut by :class:`~coverage_engine.parse.Location` offsets), so
 a concrete variant is the source text with ``in [...]`` replaced by ``== <value>``.
 
@@ -41,6 +46,20 @@ class Choice:
 
 
 @dataclass(frozen=True, slots=True)
+class RangeSpec:
+    """The ends of a range dimension as numbers in its literals' unit (``unit`` "" for plain numbers)."""
+
+    low: float
+    high: float
+    unit: str
+    location: Location
+
+    def text(self, number: float) -> str:
+        """A drawn value as source text (``12.5kph``): the shortest form that reads back the same."""
+        return f"{number!r}{self.unit}" if self.unit else repr(number)
+
+
+@dataclass(frozen=True, slots=True)
 class Dimension:
     """One ``keep(<left> in [...])`` to vary.
 
@@ -58,6 +77,8 @@ class Dimension:
     start: int
     end: int
     location: Location
+    #: A continuous range (its values are drawn by a sampler), else None.
+    continuous: RangeSpec | None = None
 
     def replacement(self, choice: int) -> str:
         """The source text replacing the ``in`` expression for ``choices[choice]``."""
@@ -138,19 +159,83 @@ def _keep_dimension(keep: s.KeepConstraint, text: str, scenario: str, owner: lis
         return None
     _check_in(expr)
     parts = _path(expr.left)
-    assert parts is not None and isinstance(expr.right, s.ListExpr)  # checked by _check_in
+    assert parts is not None  # checked by _check_in
     path = owner + parts[1:] if parts[0] == "it" else parts
     if parts[0] == "it" and owner_target is not None:
         target: tuple = (*owner_target, tuple(parts[1:]))
     else:
         target = (scenario, "member", tuple(path))
     choices = []
-    for item in expr.right.items:
-        item_text = one_line(_cut(text, item.location))
-        choices.append(Choice(item_text, _stored(item, item_text), item.location))
+    continuous = None
+    if isinstance(expr.right, s.ListExpr):
+        for item in expr.right.items:
+            item_text = one_line(_cut(text, item.location))
+            choices.append(Choice(item_text, _stored(item, item_text), item.location))
+    else:
+        choices, continuous = _range_choices(expr.right)
     return Dimension(key=".".join([scenario, *path]), scenario=scenario, target=target,
                      left=one_line(_cut(text, expr.left.location)), choices=tuple(choices),
-                     start=expr.location.start_pos, end=expr.location.end_pos, location=keep.location)
+                     start=expr.location.start_pos, end=expr.location.end_pos, location=keep.location,
+                     continuous=continuous)
+
+
+#: Most values a stepped or integer range may list (a bigger one is a mistake, or wants a sampler).
+MAX_RANGE_VALUES = 100_000
+
+
+def _range_ends(right: s.Expression) -> tuple[list[s.Expression], Location]:
+    if isinstance(right, s.RangeExpr):
+        return [right.low, right.high], right.location
+    assert isinstance(right, s.Call)
+    return [a.value for a in right.arguments], right.location
+
+
+def _literal_number(expr: s.Expression) -> tuple[float | int, str]:
+    """A range end as (number, unit text): ``5``, ``-2.5``, ``10kph``; else an error at its place."""
+    from coverage_engine.errors import ResolveError
+
+    sign = 1
+    if isinstance(expr, s.UnaryOp) and expr.op in ("-", "+"):
+        sign = -1 if expr.op == "-" else 1
+        expr = expr.operand
+    if isinstance(expr, s.Literal) and expr.kind in ("int", "float") and not isinstance(expr.value, bool):
+        return sign * cast("int | float", expr.value), ""
+    if isinstance(expr, s.PhysicalLiteral):
+        return sign * expr.number, expr.unit
+    raise ResolveError("a range end must be a number, with or without a unit (10, 2.5, 10kph)", expr.location)
+
+
+def _range_choices(right: s.Expression) -> tuple[list[Choice], RangeSpec | None]:
+    """The values of a range: listed for an integer or stepped range; a :class:`RangeSpec` for a real one."""
+    from coverage_engine.errors import ResolveError
+
+    ends, where = _range_ends(right)
+    numbers = [_literal_number(e) for e in ends]
+    units = {unit for _, unit in numbers}
+    if len(units) > 1:
+        raise ResolveError(f"the ends of a range must be written in one unit (got {', '.join(sorted(units))})",
+                           where)
+    unit = units.pop()
+    low, high = numbers[0][0], numbers[1][0]
+    if not low < high:
+        raise ResolveError(f"a range goes from low to high (got {low}..{high})", where)
+    step = numbers[2][0] if len(numbers) == 3 else None
+    if step is not None and not step > 0:
+        raise ResolveError(f"the step of a range must be above 0 (got {step})", ends[2].location)
+    integral = all(isinstance(n, int) for n, _ in numbers)
+    if step is None and not (integral and not unit):
+        return [], RangeSpec(float(low), float(high), unit, where)
+    step = step if step is not None else 1
+    count = int((high - low) / step + 1e-9) + 1
+    if count > MAX_RANGE_VALUES:
+        raise ResolveError(f"this range lists {count} values (more than {MAX_RANGE_VALUES:,}); use a larger step, "
+                           "or draw values with --strategy lhs|random|sobol|halton", where)
+    values = [low + i * step for i in range(count)]
+    if integral:
+        values = [int(v) for v in values]
+    else:
+        values = [round(v, 12) for v in values]
+    return [Choice(f"{v!r}{unit}" if unit else repr(v), f"{v!r}{unit}" if unit else v, where) for v in values], None
 
 
 def _check_in(expr: s.BinaryOp) -> None:
@@ -159,13 +244,16 @@ def _check_in(expr: s.BinaryOp) -> None:
     from coverage_engine.errors import ResolveError, UnsupportedFeatureError
 
     right = expr.right
-    if isinstance(right, s.RangeExpr):
-        raise UnsupportedFeatureError("ranges are not variation dimensions (list the values: "
-                                      "'in [v1, v2, ...]')", right.location)
-    if not isinstance(right, s.ListExpr):
+    if isinstance(right, s.Call) and isinstance(right.callee, s.Identifier) and right.callee.name == "range":
+        if len(right.arguments) not in (2, 3) or any(a.name is not None for a in right.arguments):
+            raise ResolveError("range() takes a low and a high end and an optional step: range(5, 60, 5)",
+                               right.location)
+    elif isinstance(right, s.RangeExpr):
+        pass
+    elif not isinstance(right, s.ListExpr):
         raise UnsupportedFeatureError("the right side of 'in' must be a list of values ('in [v1, v2, ...]')",
                                       right.location)
-    if not right.items:
+    if isinstance(right, s.ListExpr) and not right.items:
         raise ResolveError("empty value list: a varied parameter needs at least one value", right.location)
     if _path(expr.left) is None:
         raise UnsupportedFeatureError("the left side of 'in' must name a parameter ('it.<name>' or '<name>')",

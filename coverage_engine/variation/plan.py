@@ -99,6 +99,8 @@ class VariationPlan:
     resolutions: int = 0
     rejections: list[Rejection] = field(default_factory=list)
     _bad: list[set[int]] = field(default_factory=list)
+    #: The combinations a strategy chose (choice index per axis), in generation order; None: the full product.
+    rows: list[tuple[int, ...]] | None = None
 
     # -- axes ---------------------------------------------------------------------------------------
 
@@ -134,7 +136,7 @@ class VariationPlan:
     @property
     def total(self) -> int:
         """Number of combinations (valid and skipped)."""
-        return math.prod(self.sizes)
+        return math.prod(self.sizes) if self.rows is None else len(self.rows)
 
     def assignment(self, choices: Sequence[int]) -> dict[str, object]:
         return {key: values[c] for key, values, c in zip(self.keys, self.stored(), choices, strict=True)}
@@ -157,7 +159,8 @@ class VariationPlan:
         ``rejection`` is None for a valid combination, else the first bad value it contains.
         """
         checks = [(slot, self._bad[i], self._rejection_of(i)) for i, slot in enumerate(self.slots) if self._bad[i]]
-        product = itertools.product(*(range(n) for n in self.sizes))
+        product: Iterator[tuple[int, ...]] = iter(self.rows) if self.rows is not None else \
+            itertools.product(*(range(n) for n in self.sizes))
         if not checks:
             for index, choices in enumerate(product):
                 yield index, choices, None
@@ -172,8 +175,14 @@ class VariationPlan:
             yield index, choices, rejection
 
     def valid_count(self) -> int:
-        """Number of combinations without a bad value (computed, not counted)."""
+        """Number of combinations without a bad value (computed for the product, counted for chosen rows)."""
+        if self.rows is not None:
+            return sum(1 for _, _, rejection in self.combinations() if rejection is None)
         return math.prod(slot.count - len(bad) for slot, bad in zip(self.slots, self._bad, strict=True))
+
+    def bad_options(self) -> list[set[int]]:
+        """Per slot, the options (value combinations of its dimensions) that do not resolve."""
+        return self._bad
 
     def _rejection_of(self, slot_index: int) -> dict[int, Rejection]:
         return {r.option: r for r in self.rejections if r.slot is self.slots[slot_index]}

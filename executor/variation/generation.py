@@ -71,12 +71,17 @@ class VariationRequest:
     debug: bool = False
     store: str | None = None
     max_variants: int = DEFAULT_MAX_VARIANTS
+    strategy: str = "full"
+    strength: int = 2
+    samples: int | None = None
+    seed: int | None = None
 
-    def recorded_options(self, source: Path) -> dict[str, object]:
+    def recorded_options(self, source: Path, seed: int | None = None) -> dict[str, object]:
         """The options kept with the run in the store, under the command line's names."""
         return {"output_dir": self.output_dir, "debug": self.debug, "log_model": self.log_model,
                 "list": self.list_only, "scenario_parameter_file": self.parameter_file,
-                "max_variants": self.max_variants, "source": str(source)}
+                "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
+                "strength": self.strength, "samples": self.samples, "seed": seed}
 
 
 def run(request: VariationRequest) -> int:
@@ -90,8 +95,19 @@ def run(request: VariationRequest) -> int:
 
             documents = read_parameter_documents(request.parameter_file)
         plan = build_plan(Path(request.scenario), documents)
+        from coverage_engine.variation import strategies
+
+        seed = request.seed
+        if seed is None and request.strategy != "full":
+            import secrets
+
+            seed = secrets.randbelow(2**31)
+            echo(f"seed {seed} (pass --seed {seed} to make the same variants again)")
+        options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
+        strategies.draw_continuous(plan, options)
+        covering = request.strategy in strategies.COVERING
         limit = request.max_variants or DEFAULT_MAX_VARIANTS
-        if plan.total > limit:
+        if plan.total > limit and not covering:
             raise TooManyVariants(
                 f"{plan.total} combinations ({report.slot_sizes(plan)}) are more than --max-variants ({limit}); "
                 "nothing was written", Location(str(plan.path), 0, 0),
@@ -99,14 +115,17 @@ def run(request: VariationRequest) -> int:
                      f"{plan.total} (one .sce file each, about {report.size_text(plan.total * SCE_FILE_BYTES)} "
                      "on disk)")
         check_plan(plan)
+        tuples = strategies.build_covering_array(plan, options) if covering else None
         report.describe(plan)
+        if request.strategy != "full":
+            echo(_strategy_summary(plan, request, tuples))
         report.report_rejections(plan)
         if request.list_only:
             return report.list_assignments(plan)
         if plan.valid_count() == 0:
             echo(f"error: none of the {plan.total} combinations resolves; nothing written", err=True)
             return 1
-        return _write(plan, request, _open_store(request.store))
+        return _write(plan, request, _open_store(request.store), seed)
 
 
 def _open_store(url: str | None) -> Engine:
@@ -121,7 +140,19 @@ def _open_store(url: str | None) -> Engine:
     return engine
 
 
-def _write(plan: VariationPlan, request: VariationRequest, engine: Engine) -> int:
+def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: object) -> str:
+    """One line: the strategy, how many variants it chose and, for a covering array, the tuples covered."""
+    from coverage_engine.variation.strategies import TupleCoverage
+
+    text = f"strategy {request.strategy}: {plan.total} variant(s) over {len(plan.sizes)} dimension(s)"
+    if isinstance(tuples, TupleCoverage):
+        text += (f"; {tuples.covered} of {tuples.coverable} coverable {tuples.strength}-tuples covered"
+                 + (f" ({tuples.impossible} impossible: they hold a value that does not resolve)"
+                    if tuples.impossible else ""))
+    return text
+
+
+def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None) -> int:
     from coverage_engine.variation.output import (
         earlier_generation,
         foreign_files,
@@ -158,7 +189,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine) -> in
     try:
         recorder = VariationRecorder(
             engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
-            source_text=plan.text, options=request.recorded_options(plan.path),
+            source_text=plan.text, options=request.recorded_options(plan.path, seed),
             output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())
     except StoreError as exc:
         raise VariationStoreError(f"{exc} (nothing was written)") from exc

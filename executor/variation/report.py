@@ -62,6 +62,11 @@ def describe(plan: VariationPlan) -> None:
         for later in slot.dims[1:]:
             first_of[later] = slot.dims[0]
     for i, dim in enumerate(plan.dimensions):
+        if dim.continuous is not None:
+            spec = dim.continuous
+            echo(f"{dim.location}: {dim.key}: range [{spec.text(spec.low)}..{spec.text(spec.high)}], "
+                 f"{len(dim.choices)} value(s) drawn")
+            continue
         values = ", ".join(c.text for c in dim.choices)
         joint = ""
         if i in first_of:
@@ -70,6 +75,10 @@ def describe(plan: VariationPlan) -> None:
         echo(f"{dim.location}: {dim.key}: {len(dim.choices)} values [{values}]{joint}")
     if plan.documents is not None:
         echo(f"parameter file: {len(plan.documents)} documents")
+    if plan.rows is not None:
+        echo(f"{plan.total} variants chosen from {slot_sizes(plan)} values, {plan.resolutions} resolutions to "
+             "check the values")
+        return
     echo(f"{plan.total} combinations ({slot_sizes(plan)}), {plan.resolutions} resolutions to check the values")
 
 

@@ -155,3 +155,13 @@ def test_a_value_that_does_not_resolve_is_never_chosen_and_its_tuples_are_imposs
     rows = assignments(tmp_path / "out")
     assert rows and all(r["x"] in (1, 2) for r in rows)
     assert "(4 impossible: they hold a value that does not resolve)" in done.stdout
+
+
+def test_sobol_points_come_from_scipy(tmp_path):
+    (tmp_path / "r.osc").write_text(CONTINUOUS)
+    done = vary(tmp_path, "r.osc", "--strategy", "sobol", "--samples", "8", "--seed", "2")
+    assert done.returncode == 0, done.stderr
+    rows = assignments(tmp_path / "out")
+    assert len(rows) == 8 and all(10 <= float(r["v"]) <= 30 for r in rows)
+    # a scrambled Sobol set of 8 points puts one point in each eighth of each axis
+    assert sorted(int((float(r["g"]) - 0.5) / 2 * 8) for r in rows) == list(range(8))

@@ -105,6 +105,7 @@ def _check_post_run(hooks) -> None:
 
 
 @click.command(context_settings={**CONTEXT, "allow_interspersed_args": False})
+@click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.option("-i", "--input-dir", type=click.Path(file_okay=False), help="Folder with the .sce/.osc files.")
 @click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
               help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
@@ -168,6 +169,10 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
         if signum is not None:
             line += "; interrupted, finish with --resume"
         click.echo(line)
+        if not sum(counts.values()) and signum is None:
+            where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
+            click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "
+                       "pytest exits when it collects no test)", err=True)
         return orchestration.exit_code(counts, signum)
     finally:
         store.close()
@@ -258,10 +263,25 @@ def report_command(store_url, batch_id, output, debug):
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
 
 
+def _unknown_subcommand(word: str) -> None:
+    """A bare word first is a subcommand or a mistake (the batch run itself takes only options): say which
+    subcommands there are, and the nearest one, as click does for a misspelt option."""
+    import difflib
+
+    close = difflib.get_close_matches(word, list(SUBCOMMANDS), n=1, cutoff=0.6)
+    hint = f" Did you mean '{close[0]}'?" if close else ""
+    click.echo(f"Usage: {PROG} [OPTIONS] -- [COMMAND]...\n       {PROG} worker|status|report [OPTIONS]\n"
+               f"Try '{PROG} -h' for help.\n\n{PROG}: error: no such subcommand '{word}' (subcommands: "
+               f"{', '.join(SUBCOMMANDS)}).{hint}", err=True)
+    raise SystemExit(2)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point: dispatch to a subcommand or the batch run, map errors to exit codes."""
     args = list(sys.argv[1:] if argv is None else argv)
     command, prog = run_command, PROG
+    if args and not args[0].startswith("-") and args[0] not in SUBCOMMANDS:
+        _unknown_subcommand(args[0])
     if args and args[0] in SUBCOMMANDS:
         command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
         args = args[1:]

@@ -167,6 +167,7 @@ def json_command(results: str | None, store_url: str | None, batch_id: int | Non
     return _gate(report, fail_under)
 
 
+@click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.group(context_settings=CONTEXT,
              commands={"report": report_command, "html": html_command, "json": json_command})
 def group() -> None:

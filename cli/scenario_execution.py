@@ -21,6 +21,7 @@ MAX_STEP_DURATION = 86400.0
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @debug_option
 @click.option("-l", "--log-model", is_flag=True, help="Print the resolved model of the scenario file.")
 @click.option("-t", "--live-tree", is_flag=True, help="Show the behaviour tree with its statuses while running.")

@@ -24,6 +24,7 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.option("-o", "-t", "--output-dir", default="out", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the generated .sce files (-t is an alias). Earlier .sce files there are replaced.")
 @debug_option

@@ -203,12 +203,18 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     return store.counts(batch.id)
 
 
+#: Exit code of a batch with no job at all (an empty shard): pytest's "no tests collected", not a green run.
+EXIT_NOTHING_RAN = 5
+
+
 def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
-    """0 only when every job of the batch passed; 128+signal when interrupted."""
+    """0 only when every job of the batch passed; 5 when it had none; 128+signal when interrupted."""
     if signum is not None:
         return EXIT_INTERRUPTED.get(signum, 128 + int(signum))
     total = sum(counts.values())
-    return 0 if total and counts[JobState.PASSED] == total else 1
+    if not total:
+        return EXIT_NOTHING_RAN
+    return 0 if counts[JobState.PASSED] == total else 1
 
 
 def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:

@@ -1,4 +1,5 @@
-"""Placeholders are substituted once, and shell-quoted inside ``sh -c`` scripts (issue 21 item 4)."""
+"""Batch command-line edges: placeholders substituted once and shell-quoted (issue 21 item 4), empty shards,
+misspelt subcommands and --version (issues 22 and 17)."""
 
 from __future__ import annotations
 
@@ -41,3 +42,34 @@ def test_a_folder_named_with_a_placeholder_runs_its_own_files(tmp_path):
                    cli_env(tmp_path))
     assert done.returncode == 0, done.stdout + done.stderr
     assert (tmp_path / "results" / "one" / "test.xml").is_file()
+
+
+def test_an_empty_shard_exits_5_and_says_so(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"only": "xml=pass"})
+    codes = {}
+    for index in (1, 2, 3):
+        done = run_cli(["-i", "in", "-o", f"s{index}", "--shard", f"{index}/3", "--", *child_command(child)],
+                       tmp_path, cli_env(tmp_path))
+        codes[index] = done.returncode
+        if done.returncode == 5:
+            assert f"warning: shard {index}/3 holds no scenario file: nothing ran" in done.stderr
+    assert sorted(codes.values()) == [0, 5, 5]
+
+
+def test_a_misspelt_subcommand_is_named_with_the_nearest_one(tmp_path):
+    done = run_cli(["wroker", "--store", "sqlite:///x.db"], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 2
+    assert done.stderr.strip().endswith(
+        "error: no such subcommand 'wroker' (subcommands: worker, status, report). Did you mean 'worker'?")
+    assert not (tmp_path / "x.db").exists()
+
+
+def test_every_command_says_its_version(tmp_path):
+    import subprocess
+    import sys
+    from importlib.metadata import version
+
+    for name in ("scenario_execution", "scenario_variation", "scenario_batch_execution", "scenario_coverage"):
+        done = subprocess.run([str(Path(sys.executable).parent / name), "--version"], capture_output=True, text=True)
+        assert done.returncode == 0 and done.stdout.strip() == f"{name} {version('scenario-coverage')}"

@@ -165,6 +165,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
             return 0
         counts, signum = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
         report = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        _print_failures(store, batch)
         line = orchestration.summary_line(batch, counts, report)
         if signum is not None:
             line += "; interrupted, finish with --resume"
@@ -227,14 +228,39 @@ def _pick_batch(store, batch_id):
 @click.command(context_settings=CONTEXT)
 @store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to show (default: the latest).")
+@click.option("--list", "list_state", type=click.Choice(["failed"]),
+              help="List the jobs that did not pass (failed, error, timeout): name, reason and log.")
+@click.option("--json", "as_json", is_flag=True, help="Print the status (and the --list) as JSON, for scripts.")
 @debug_option
-def status_command(store_url, batch_id, debug):
+def status_command(store_url, batch_id, list_state, as_json, debug):
     """Show jobs per state, running jobs per worker and host, and an ETA."""
+    from executor.batch.failure_summary import not_passed
     from executor.batch.status import render, snapshot
+    from store.variant_lookup import variant_infos
 
     store = _open_store(store_url, existing=True)
     try:
-        render(snapshot(store, _pick_batch(store, batch_id)), sys.stdout)
+        batch = _pick_batch(store, batch_id)
+        snap = snapshot(store, batch)
+        failed = None
+        if list_state is not None:
+            jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]
+            failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
+        if as_json:
+            import json
+
+            document: dict[str, object] = {
+                "batch": batch.id, "total": snap.total,
+                "counts": {state.value: count for state, count in snap.counts.items()},
+                "running": [{"host": host, "worker": worker, "jobs": n} for (host, worker), n in snap.running.items()],
+                "eta_seconds": snap.eta_seconds}
+            if failed is not None:
+                document["not_passed"] = [item.as_dict() for item in failed]
+            click.echo(json.dumps(document, indent=2))
+            return 0
+        render(snap, sys.stdout)
+        for item in failed or ():
+            click.echo(item.line())
     finally:
         store.close()
     return 0
@@ -261,6 +287,17 @@ def report_command(store_url, batch_id, output, debug):
 
 
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
+
+
+def _print_failures(store, batch) -> None:
+    """The short summary of the jobs that did not pass (nothing when all passed)."""
+    from executor.batch.failure_summary import not_passed, summary_lines
+    from store.variant_lookup import variant_infos
+
+    jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]   # with their test.xml
+    failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
+    for text in summary_lines(failed):
+        click.echo(text)
 
 
 def _unknown_subcommand(word: str) -> None:

@@ -159,7 +159,7 @@ def _quote_fast(value: object) -> str | None:
         text = repr(value)
         # PyYAML reads a float only with a dot in its mantissa; inf, nan and exponents go the slow way.
         return text if "." in text and "e" not in text and "n" not in text else None
-    if kind is str and _PLAIN_ASCII.fullmatch(value):  # type: ignore[arg-type]
+    if isinstance(value, str) and kind is str and _PLAIN_ASCII.fullmatch(value):
         import json
 
         return json.dumps(value)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 from typing import TextIO
 
-from executor.terminal import wants_rich
+from executor.terminal import printable, wants_rich
 from store.jobs import Job, JobResult
 from store.states import JobState
 
@@ -38,9 +38,9 @@ class Reporter:
 
 def _line(prefix: str, job: Job, result: JobResult, retrying: bool) -> str:
     verdict = "retry" if retrying else result.status.value
-    text = f"{prefix}{verdict:<9} {job.name}  {result.duration:.2f} s"
+    text = f"{prefix}{verdict:<9} {printable(job.name)}  {result.duration:.2f} s"
     if result.status is not JobState.PASSED and result.reason:
-        text += f"  ({result.reason})"
+        text += f"  ({printable(result.reason)})"
     return text
 
 

@@ -1,0 +1,73 @@
+"""The end of a batch says which jobs did not pass, why and where, like pytest's "short test summary info".
+
+One line per job that did not pass: its verdict, its testcase name (the variant with its varied
+values, as CI pages show it), the reason (the failing action and its location from the job's own
+``test.xml``, else the runner's: a timeout, an exit code, no report), and the path of its log. The
+reasons are the same texts the merged ``test.xml`` carries, because they come from the same code
+(:func:`executor.batch.junit_merge.job_cases`). Names and reasons are printed with control characters
+escaped, so a file named with terminal escapes cannot clear or rewrite the screen.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+from executor.batch.junit_merge import child_cases, job_cases, job_names
+from executor.terminal import printable
+from store.jobs import Job
+from store.states import FINAL, JobState
+
+#: Longest reason shown on a summary line (the whole text is in test.xml and the log).
+REASON_CHARS = 240
+#: At most this many lines are listed; the rest are counted.
+MAX_LINES = 50
+
+
+@dataclass(frozen=True)
+class NotPassed:
+    """One job that did not pass, as the summary and ``status --list`` show it."""
+
+    status: str
+    name: str
+    reason: str
+    log: str | None
+    scenario: str
+
+    def line(self) -> str:
+        where = f"  (log: {self.log})" if self.log else ""
+        return f"{self.status.upper():<8} {printable(self.name)} - {printable(self.reason)}{where}"
+
+    def as_dict(self) -> dict[str, str | None]:
+        return {"status": self.status, "name": self.name, "reason": self.reason, "log": self.log,
+                "scenario": self.scenario}
+
+
+def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[NotPassed]:
+    """The finished jobs that did not pass, in the batch's order."""
+    found = []
+    for job in jobs:
+        if job.status not in FINAL or job.status is JobState.PASSED:
+            continue
+        names = job_names(job, (variants or {}).get(job.scenario_path))
+        cases = job_cases(job, names, child_cases(job))
+        problem = next((c for c in cases if c.problem), None)
+        reason = (problem.message if problem is not None and problem.message else job.reason) or job.status.value
+        reason = " ".join(reason.split())
+        if len(reason) > REASON_CHARS:
+            reason = reason[:REASON_CHARS - 1] + "…"
+        log = os.path.join(job.output_dir, "log.txt") if job.output_dir else None
+        found.append(NotPassed(job.status.value, names.name, reason, log, job.scenario_path))
+    return found
+
+
+def summary_lines(items: list[NotPassed]) -> list[str]:
+    """The block printed at the end of a batch (empty when every job passed)."""
+    if not items:
+        return []
+    lines = [f"--- {len(items)} job(s) did not pass ---"]
+    lines += [item.line() for item in items[:MAX_LINES]]
+    if len(items) > MAX_LINES:
+        lines.append(f"... and {len(items) - MAX_LINES} more (scenario_batch_execution status --list failed)")
+    return lines

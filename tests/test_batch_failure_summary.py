@@ -1,0 +1,56 @@
+"""A batch ends with one line per job that did not pass: which variant, why, where its log is (issue 22 item 1)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
+
+BIN = Path(sys.executable).parent
+SCENARIO = """import osc.helpers
+scenario gap_check:
+    gap: float = 1.0 with:
+        keep(it in [0.5, 2.0])
+    do serial:
+        compare(gap, ">", 1.0)
+"""
+
+
+def test_failed_variants_are_listed_with_values_reason_and_log(tmp_path):
+    (tmp_path / "gap.osc").write_text(SCENARIO)
+    env = dict(os.environ, NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    subprocess.run([str(BIN / "scenario_variation"), "gap.osc"], cwd=tmp_path, env=env, check=True, capture_output=True)
+    done = subprocess.run([str(BIN / "scenario_batch_execution"), "-i", "out", "-o", "results"], cwd=tmp_path,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1
+    lines = done.stdout.splitlines()
+    at = lines.index("--- 1 job(s) did not pass ---")
+    assert lines[at + 1] == (f"FAILED   gap0[gap=0.5] - 'compare' ({tmp_path / 'out' / 'gap0.sce'}:17:9) failed: "
+                             f"0.5 > 1.0 is False  (log: {tmp_path / 'results' / 'gap0' / 'log.txt'})")
+    assert lines[at + 2].startswith("batch 1: 2 job(s): 1 passed, 1 failed")
+    status = subprocess.run([str(BIN / "scenario_batch_execution"), "status", "--list", "failed", "--json"],
+                            cwd=tmp_path, env=env, capture_output=True, text=True)
+    document = json.loads(status.stdout)
+    assert document["counts"]["failed"] == 1 and document["counts"]["passed"] == 1
+    assert [(i["name"], i["status"]) for i in document["not_passed"]] == [("gap0[gap=0.5]", "failed")]
+    assert "0.5 > 1.0 is False" in document["not_passed"][0]["reason"]
+
+
+def test_timeouts_and_errors_say_why_and_names_are_escaped(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"slow": "sleep=30", "crash": "xml=none\nexit=3", "ok": "xml=pass",
+                                      "esc\x1b[2J": "xml=fail"})
+    done = run_cli(["-i", "in", "-o", "results", "-j", "2", "--timeout", "1", "--", *child_command(child)], tmp_path,
+                   cli_env(tmp_path))
+    assert done.returncode == 1
+    summary = done.stdout[done.stdout.index("--- 3 job(s) did not pass ---"):]
+    assert "\x1b" not in done.stdout
+    assert "FAILED   esc\\x1b[2J - it failed" in summary
+    assert "TIMEOUT  slow - timed out after 1 s" in summary
+    assert "ERROR    crash - " in summary and "exit code 3" in summary
+    assert "ok" not in summary.split("\n", 1)[1].split("batch ")[0].replace("(log", "")

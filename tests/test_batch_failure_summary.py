@@ -54,3 +54,19 @@ def test_timeouts_and_errors_say_why_and_names_are_escaped(tmp_path):
     assert "TIMEOUT  slow - timed out after 1 s" in summary
     assert "ERROR    crash - " in summary and "exit code 3" in summary
     assert "ok" not in summary.split("\n", 1)[1].split("batch ")[0].replace("(log", "")
+
+
+def test_variant_values_reach_the_report_whatever_store_ran_the_batch(tmp_path):
+    """Variation recorded in one store, the batch run with another: the .sce header names the values (item 2)."""
+    import xml.etree.ElementTree as ET
+
+    (tmp_path / "gap.osc").write_text(SCENARIO)
+    env = dict(os.environ, NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    subprocess.run([str(BIN / "scenario_variation"), "gap.osc", "--store", f"sqlite:///{tmp_path / 'a.db'}"],
+                   cwd=tmp_path, env=env, check=True, capture_output=True)
+    subprocess.run([str(BIN / "scenario_batch_execution"), "-i", "out", "-o", "results", "--store",
+                    f"sqlite:///{tmp_path / 'b.db'}"], cwd=tmp_path, env=env, capture_output=True, timeout=120)
+    suites = {s.get("name"): s for s in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testsuite")}
+    properties = {p.get("name"): p.get("value") for p in suites["gap1"].iter("property")}
+    assert properties["variation.gap_check.gap"] == "2.0"

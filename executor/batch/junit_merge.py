@@ -212,7 +212,14 @@ def job_cases(job: Job, names: JobNames, cases: list[Case], interrupted: str | N
 
 
 def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | None = None):
-    """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped."""
+    """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped.
+
+    A variant the store does not know (recorded in another store, or copied from elsewhere) is named
+    and given its ``variation.*`` properties from its own ``.sce`` header, so the values reach the report
+    whatever store was used.
+    """
+    if variant is None and job.scenario_path.endswith(".sce"):
+        variant = _variant_from_file(job.scenario_path)
     reported = child_cases(job)
     cases = job_cases(job, job_names(job, variant), reported, interrupted)
     return suite_element(job.name, cases, timestamp=iso_timestamp(job.started_at) if job.started_at else None,

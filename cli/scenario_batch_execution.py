@@ -126,11 +126,13 @@ def _check_post_run(hooks) -> None:
 @click.option("--enqueue-only", is_flag=True, help="Put the jobs into the (shared) store; 'worker' runs them.")
 @click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat before another worker may take it.")
+@click.option("--wait", is_flag=True,
+              help="When another batch writes into the output folder, wait for it instead of stopping.")
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, store_url, debug, command):
+                ignore_return_value, post_run, enqueue_only, lease, wait, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -152,6 +154,16 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace),
         shard=shard)
+    lock = None
+    if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
+        from executor.folder_lock import FolderBusy, FolderLock
+
+        try:
+            lock = FolderLock(request.output_dir, PROG).acquire(wait, on_wait=lambda text: click.echo(text, err=True))
+        except FolderBusy as exc:
+            raise BatchError(f"{exc}; nothing was run") from None
+        except OSError as exc:
+            raise BatchError(f"cannot use the output folder {request.output_dir}: {exc.strerror or exc}") from None
     store = _open_store(store_url)
     try:
         if resume:
@@ -177,6 +189,8 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
         return orchestration.exit_code(counts, signum)
     finally:
         store.close()
+        if lock is not None:
+            lock.release()
 
 
 @click.command(context_settings=CONTEXT)

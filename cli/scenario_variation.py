@@ -46,9 +46,11 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
 @click.option("--seed", type=click.IntRange(min=0, max=2**63 - 1), metavar="S",
               help="Seed of pairwise/t-way/sampling (the same seed gives the same variants); chosen and printed "
                    "when left out.")
+@click.option("--wait", is_flag=True,
+              help="When another run writes into the output folder, wait for it instead of stopping.")
 @click.argument("scenario", type=click.Path(dir_okay=False))
 def command(scenario, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
-            strategy, strength, samples, seed):
+            strategy, strength, samples, seed, wait):
     """Generate concrete scenarios (.sce) from the values listed or ranged in SCENARIO (.osc).
 
     Every keep(it.<param> in [v1, v2, ...]) or keep(it.<param> in [low..high]) is one dimension; with the
@@ -59,7 +61,7 @@ def command(scenario, output_dir, debug, log_model, list_only, store_url, scenar
     return run(VariationRequest(
         scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
         log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
-        strength=strength, samples=samples, seed=seed))
+        strength=strength, samples=samples, seed=seed, wait=wait))
 
 
 def main(args: list[str] | None = None) -> None:

@@ -55,6 +55,10 @@ class TooManyVariants(OscError):
     """more combinations than --max-variants allows"""
 
 
+class OutputFolderBusy(OscError):
+    """another scenario_variation (or batch) writes into the output folder"""
+
+
 class ForeignFilesInOutput(OscError):
     """files in the output folder that this generation would replace but did not write"""
 
@@ -75,6 +79,7 @@ class VariationRequest:
     strength: int = 2
     samples: int | None = None
     seed: int | None = None
+    wait: bool = False
 
     def recorded_options(self, source: Path, seed: int | None = None) -> dict[str, object]:
         """The options kept with the run in the store, under the command line's names."""
@@ -125,7 +130,15 @@ def run(request: VariationRequest) -> int:
         if plan.valid_count() == 0:
             echo(f"error: none of the {plan.total} combinations resolves; nothing written", err=True)
             return 1
-        return _write(plan, request, _open_store(request.store), seed)
+        from executor.folder_lock import FolderBusy, FolderLock
+
+        try:
+            lock = FolderLock(request.output_dir, "scenario_variation").acquire(
+                request.wait, on_wait=lambda text: echo(text, err=True))
+        except FolderBusy as exc:
+            raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
+        with lock:
+            return _write(plan, request, _open_store(request.store), seed)
 
 
 def _open_store(url: str | None) -> Engine:

@@ -154,18 +154,11 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace),
         shard=shard)
-    lock = None
-    if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
-        from executor.folder_lock import FolderBusy, FolderLock
-
-        try:
-            lock = FolderLock(request.output_dir, PROG).acquire(wait, on_wait=lambda text: click.echo(text, err=True))
-        except FolderBusy as exc:
-            raise BatchError(f"{exc}; nothing was run") from None
-        except OSError as exc:
-            raise BatchError(f"cannot use the output folder {request.output_dir}: {exc.strerror or exc}") from None
     store = _open_store(store_url)
+    lock = None
     try:
+        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
+            lock = _lock_output(request.output_dir, wait)
         if resume:
             batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
@@ -301,6 +294,18 @@ def report_command(store_url, batch_id, output, debug):
 
 
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
+
+
+def _lock_output(folder: str, wait: bool):
+    """Hold the output folder's lock (executor.folder_lock) for the run, or say who holds it."""
+    from executor.folder_lock import FolderBusy, FolderLock
+
+    try:
+        return FolderLock(folder, PROG).acquire(wait, on_wait=lambda text: click.echo(text, err=True))
+    except FolderBusy as exc:
+        raise BatchError(f"{exc}; nothing was run") from None
+    except OSError as exc:
+        raise BatchError(f"cannot use the output folder {folder}: {exc.strerror or exc}") from None
 
 
 def _print_failures(store, batch) -> None:

@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from coverage_engine.coverage.run_file import ItemSamples, RunCoverageBuilder, write_run_coverage
 from coverage_engine.coverage.values import ValueType
 from coverage_engine.resolve.evaluate import evaluate
-from coverage_engine.resolve.model import CoverageItem, Scenario
+from coverage_engine.resolve.model import CoverageItem, Scenario, VariableRef
 
 #: JUnit property values longer than this are cut (a record item sampled every tick).
 PROPERTY_CHARS = 200
@@ -47,6 +47,7 @@ class CoverageSampler:
             self._by_event.setdefault(item.event, []).append((item, samples))
         self._parts = {item.name: tuple(declared[name] for name in item.items) for item in scenario.coverage
                        if item.items}
+        self._getters = {item.name: _getter(item, variables) for item in scenario.coverage if not item.items}
 
     def _declare(self, item: CoverageItem) -> ItemSamples:
         path, builder = self.scenario.name, self.builder
@@ -80,8 +81,7 @@ class CoverageSampler:
             samples.add(self._value(item))
 
     def _value(self, item: CoverageItem) -> object:
-        assert item.expression is not None
-        value = evaluate(item.expression, self.variables)
+        value = self._getters[item.name]()
         kind = item.value_kind
         if kind == "enum":
             return value[0] if isinstance(value, tuple) else str(value)
@@ -104,6 +104,17 @@ class CoverageSampler:
         """Write ``coverage.json`` into ``output_dir``; returns its path."""
         run = self.builder.build(verdict, reason or None, duration=duration)
         return str(write_run_coverage(output_dir, run))
+
+
+def _getter(item: CoverageItem, variables: dict[str, object]) -> Callable[[], object]:
+    """A function giving the item's current value: a plain variable is read directly (sampling every tick
+    of a long run must cost next to nothing), anything else goes through the model's evaluator."""
+    expression = item.expression
+    assert expression is not None
+    if isinstance(expression, VariableRef):
+        key = expression.variable.key
+        return lambda: variables[key]
+    return lambda: evaluate(expression, variables)
 
 
 def _samples_text(values: Sequence[object]) -> str:

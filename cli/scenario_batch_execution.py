@@ -128,11 +128,14 @@ def _check_post_run(hooks) -> None:
               help="Seconds a job is held without a heartbeat before another worker may take it.")
 @click.option("--wait", is_flag=True,
               help="When another batch writes into the output folder, wait for it instead of stopping.")
+@click.option("--rerun-failed", is_flag=True,
+              help="Run again, as a new batch, the jobs that did not pass in the latest batch of -o (like pytest "
+                   "--lf); the report keeps the earlier passes.")
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, store_url, debug, command):
+                ignore_return_value, post_run, enqueue_only, lease, wait, rerun_failed, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -144,7 +147,10 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     from executor.batch.progress import make_reporter
     from store.jobs import BatchOptions
 
-    if not resume and input_dir is None:
+    if rerun_failed and (resume or enqueue_only or input_dir is not None or command):
+        raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the latest batch's "
+                               "failures with that batch's input, command and options")
+    if not resume and not rerun_failed and input_dir is None:
         raise click.UsageError("missing -i/--input-dir")
     if command:                  # none: the built-in runner (scenario_execution forked, not launched)
         _check_command(command)
@@ -159,7 +165,16 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     try:
         if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
             lock = _lock_output(request.output_dir, wait)
-        if resume:
+        earlier = None
+        if rerun_failed:
+            earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
+            if rerun is None:
+                click.echo(f"every job of batch {earlier.id} passed: nothing to rerun")
+                return 0
+            click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
+                       f"pass in batch {earlier.id}")
+            batch = rerun
+        elif resume:
             batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
             batch = orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
@@ -170,6 +185,8 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
             return 0
         counts, signum = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
         report = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        if earlier is not None and signum is None:
+            counts = orchestration.write_rerun_report(store, earlier, batch, report)
         _print_failures(store, batch)
         line = orchestration.summary_line(batch, counts, report)
         if signum is not None:

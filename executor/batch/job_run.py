@@ -51,10 +51,18 @@ def job_marker(job_id: int, attempt: int) -> str:
 
 
 def rotate_log(output_dir: Path, attempt: int) -> None:
-    """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts."""
+    """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts.
+
+    A log of an earlier batch in the same job folder (``--rerun-failed``, a new batch into the same
+    ``-o``) is kept too, under the first free ``log.<n>.txt``: nothing written is lost.
+    """
     log = output_dir / LOG_FILE
-    if attempt > 1 and log.exists():
-        log.replace(output_dir / f"log.{attempt - 1}.txt")
+    if not log.exists():
+        return
+    number = max(attempt - 1, 1)
+    while (output_dir / f"log.{number}.txt").exists():
+        number += 1
+    log.replace(output_dir / f"log.{number}.txt")
 
 
 class JobRun:

@@ -78,6 +78,45 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
                               command=request.command, options=options, specs=specs)
 
 
+def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch | None]:
+    """``--rerun-failed``: a new batch of the jobs that did not pass in the latest batch of ``output_dir``.
+
+    Returns ``(earlier, new)``; ``new`` is None when every job of the earlier batch passed. The new batch
+    runs like the earlier one (its command and options) and writes into the same job folders (their
+    earlier logs are kept as ``log.<n>.txt``).
+    """
+    earlier = store.latest_batch(output_dir=output_dir)
+    if earlier is None:
+        raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url}: nothing to rerun")
+    files = [Path(job.scenario_path) for job in store.jobs(earlier.id) if job.status is not JobState.PASSED]
+    missing = [str(f) for f in files if not f.is_file()]
+    if missing:
+        raise BatchError(f"--rerun-failed: scenario file(s) gone since batch {earlier.id}: {', '.join(missing[:3])}")
+    if not files:
+        return earlier, None
+    batch = store.create_batch(mode="local", input_dir=earlier.input_dir, output_dir=output_dir,
+                               host=socket.gethostname(), command=earlier.command, options=earlier.options,
+                               specs=job_specs(files))
+    return earlier, batch
+
+
+def write_rerun_report(store: QueueStore, earlier: Batch, batch: Batch, path: str | os.PathLike[str]) -> dict[
+        JobState, int]:
+    """The merged report of a rerun: the earlier batch's jobs that passed, then every rerun job's new result
+    (so the report keeps the whole folder, with the reruns' verdicts); returns the combined counts."""
+    rerun = {job.name: job for job in store.iter_results(batch.id)}
+    jobs = [rerun.get(job.name, job) for job in store.iter_results(earlier.id)]
+    variants = variant_infos(store.engine, [j.scenario_path for j in jobs])
+    try:
+        write_report(path, merged_report(jobs, variants))
+    except OSError as exc:
+        raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
+    counts = {state: 0 for state in JobState}
+    for job in jobs:
+        counts[job.status] += 1
+    return counts
+
+
 #: The options stored with a batch (the fields of :class:`store.jobs.BatchOptions`) and their command-line
 #: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
 OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",

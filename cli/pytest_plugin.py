@@ -1,0 +1,157 @@
+"""pytest plugin: ``pytest --osc DIR_OR_FILE`` collects scenarios and variants as test items.
+
+Registered through the ``pytest11`` entry point, so it is loaded by every pytest run where this
+package is installed; it does nothing unless ``--osc`` is given (it only adds its options, and imports
+nothing of ours until it collects). With ``--osc``:
+
+- every ``.osc`` file (one item per file, named after its scenario) and every ``.sce`` variant (named
+  after the variant) under the given paths is a test item; with no other path on the command line,
+  only those are collected;
+- an item runs ``scenario_execution FILE --output-dir <--osc-output>/<item>`` in a subprocess (a crash,
+  a hang or a leaked global cannot touch pytest or the next item), and passes when the scenario does;
+- a failure is reported with the scenario's own located message (``file:line:col``, the failing
+  action) and the end of the run's log;
+- everything pytest offers applies: ``-k``, ``-x``, ``--lf``, ``--junitxml``, ``-n auto``
+  (pytest-xdist), IDE runners; ``cover()`` samples land in each item's ``coverage.json``.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+#: Suffixes collected as scenarios.
+SUFFIXES = (".osc", ".sce")
+#: Lines of a failing run's log shown under its message.
+LOG_TAIL_LINES = 30
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("osc", "OpenSCENARIO DSL scenarios (scenario-coverage)")
+    group.addoption("--osc", action="append", default=[], metavar="PATH",
+                    help="collect every .osc scenario and .sce variant under PATH as a test (repeatable)")
+    group.addoption("--osc-output", default="osc-results", metavar="DIR",
+                    help="folder for each scenario run's output (test.xml, log.txt, coverage.json) [osc-results]")
+    group.addoption("--osc-timeout", type=float, default=600.0, metavar="S",
+                    help="seconds a scenario may run before it fails [600]")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    paths = config.getoption("osc")
+    if not paths:
+        return
+    roots = [Path(p).resolve() for p in paths]
+    missing = [p for p, r in zip(paths, roots, strict=True) if not r.exists()]
+    if missing:
+        raise pytest.UsageError(f"--osc {missing[0]}: no such file or folder")
+    config.stash[_ROOTS] = roots
+    if not config.option.file_or_dir:         # only the scenarios, not the project's own tests
+        config.args[:] = [str(r) for r in roots]
+    else:
+        config.args.extend(str(r) for r in roots)
+
+
+_ROOTS = pytest.StashKey[list]()
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
+    roots = parent.config.stash.get(_ROOTS, None)
+    if not roots or file_path.suffix not in SUFFIXES:
+        return None
+    resolved = file_path.resolve()
+    if not any(resolved == root or root in resolved.parents for root in roots):
+        return None
+    return ScenarioFile.from_parent(parent, path=file_path)
+
+
+class ScenarioFile(pytest.File):
+    """A scenario file: one item, named after its scenario (``.osc``) or variant (``.sce``)."""
+
+    def collect(self):
+        yield ScenarioItem.from_parent(self, name=_item_name(self.path))
+
+
+def _item_name(path: Path) -> str:
+    """The scenario's name for an ``.osc`` with exactly one scenario, else the file's stem."""
+    if path.suffix == ".osc":
+        try:
+            from coverage_engine.parse.parser import parse_text
+            from coverage_engine.variation.dimensions import scenario_names
+
+            names = scenario_names(parse_text(path.read_text(encoding="utf-8"), str(path)))
+            if len(names) == 1:
+                return names[0]
+        except Exception:  # noqa: BLE001 - a file that does not parse still becomes an item (and fails with why)
+            pass
+    return path.stem
+
+
+class ScenarioFailed(Exception):
+    """The scenario failed; carries its located message and the end of its log."""
+
+    def __init__(self, message: str, log_tail: str) -> None:
+        super().__init__(message)
+        self.message = message
+        self.log_tail = log_tail
+
+
+class ScenarioItem(pytest.Item):
+    """One scenario run through ``scenario_execution`` in a subprocess."""
+
+    def runtest(self) -> None:
+        config = self.config
+        output = Path(config.getoption("osc_output")).resolve() / _folder_name(self.nodeid)
+        output.mkdir(parents=True, exist_ok=True)
+        command = [sys.executable, "-m", "cli.scenario_execution", str(self.path), "--output-dir", str(output)]
+        env = dict(os.environ, NO_COLOR="1", PYTHONUNBUFFERED="1")
+        root = str(Path(__file__).resolve().parent.parent)
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        try:
+            done = subprocess.run(command, cwd=self.path.parent, env=env, stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, timeout=config.getoption("osc_timeout"))
+        except subprocess.TimeoutExpired as exc:
+            log = (exc.stdout or b"").decode("utf-8", "replace")
+            raise ScenarioFailed(f"timed out after {config.getoption('osc_timeout'):g} s", _tail(log)) from None
+        log = done.stdout.decode("utf-8", "replace")
+        (output / "log.txt").write_text(log, encoding="utf-8")
+        if done.returncode != 0:
+            raise ScenarioFailed(_failure_message(output / "test.xml", log), _tail(log))
+
+    def repr_failure(self, excinfo, style=None):
+        if isinstance(excinfo.value, ScenarioFailed):
+            failure = excinfo.value
+            return f"{failure.message}\n\n--- end of the run's log ---\n{failure.log_tail}"
+        return super().repr_failure(excinfo, style=style)
+
+    def reportinfo(self):
+        return self.path, None, f"scenario {self.name}"
+
+
+def _folder_name(nodeid: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in nodeid)[-150:]
+
+
+def _failure_message(report: Path, log: str) -> str:
+    """The first failure or error message of the run's ``test.xml`` (it holds the location), else the log's
+    last error line."""
+    try:
+        from defusedxml import ElementTree
+
+        root = ElementTree.parse(str(report)).getroot()
+        for case in root.iter("testcase"):
+            for tag in ("failure", "error"):
+                found = case.find(tag)
+                if found is not None and found.get("message"):
+                    return f"{case.get('name')}: {found.get('message')}"
+    except Exception:  # noqa: BLE001 - no readable report: fall back to the log
+        pass
+    errors = [line for line in log.splitlines() if "error" in line.lower()]
+    return errors[-1] if errors else "the scenario failed (see its log)"
+
+
+def _tail(log: str) -> str:
+    return "\n".join(log.rstrip("\n").splitlines()[-LOG_TAIL_LINES:])

@@ -1,0 +1,72 @@
+"""``pytest --osc``: scenarios and variants as pytest items, in a real pytest subprocess (issue 17 item 2)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+GOOD = 'import osc.helpers\nscenario good:\n    do serial:\n        log("fine")\n'
+BAD = 'import osc.helpers\nscenario bad:\n    gap: float = 0.5\n    do serial:\n        compare(gap, ">", 1.0)\n'
+COVERED = ('import osc.helpers\nscenario covered:\n    speed: float = 3.0\n    cover(speed)\n'
+           '    do serial:\n        log("x")\n')
+
+
+def pytest_run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env.pop("PYTEST_ADDOPTS", None)
+    return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:randomly", *args], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=180)
+
+
+def scenarios(tmp_path: Path) -> None:
+    folder = tmp_path / "scen"
+    folder.mkdir()
+    (folder / "good.osc").write_text(GOOD)
+    (folder / "bad.osc").write_text(BAD)
+    (folder / "covered.osc").write_text(COVERED)
+    (tmp_path / "test_unrelated.py").write_text("def test_unrelated():\n    assert True\n")
+
+
+def test_collects_scenarios_as_items_named_after_them(tmp_path):
+    scenarios(tmp_path)
+    done = pytest_run(tmp_path, "--osc", "scen", "--collect-only", "-q")
+    assert done.returncode == 0, done.stdout + done.stderr
+    ids = [line for line in done.stdout.splitlines() if "::" in line]
+    assert ids == ["scen/bad.osc::bad", "scen/covered.osc::covered", "scen/good.osc::good"]
+
+
+def test_failures_carry_the_located_message_and_junit_and_coverage_work(tmp_path):
+    scenarios(tmp_path)
+    done = pytest_run(tmp_path, "--osc", "scen", "--junitxml", "report.xml")
+    assert done.returncode == 1
+    assert f"bad: 'compare' ({tmp_path / 'scen' / 'bad.osc'}:5:9) failed: 0.5 > 1.0 is False" in done.stdout
+    assert "1 failed, 2 passed" in done.stdout
+    cases = {c.get("name"): c for c in ET.parse(tmp_path / "report.xml").getroot().iter("testcase")}
+    assert set(cases) == {"good", "bad", "covered"} and cases["bad"].find("failure") is not None
+    coverage = json.loads((tmp_path / "osc-results" / "scen_covered.osc__covered" / "coverage.json").read_text())
+    assert coverage["items"][0]["samples"] == [3.0]
+
+
+def test_k_x_and_last_failed(tmp_path):
+    scenarios(tmp_path)
+    only = pytest_run(tmp_path, "--osc", "scen", "-k", "good")
+    assert only.returncode == 0 and "1 passed, 2 deselected" in only.stdout
+    stop = pytest_run(tmp_path, "--osc", "scen", "-x")
+    assert stop.returncode == 1 and "1 failed" in stop.stdout and "passed" not in stop.stdout.splitlines()[-1]
+    again = pytest_run(tmp_path, "--osc", "scen", "--lf")
+    assert again.returncode == 1 and "run-last-failure: rerun previous 1 failure" in again.stdout
+    assert again.stdout.splitlines()[-1].strip("= ").startswith("1 failed in")
+
+
+def test_without_osc_nothing_changes(tmp_path):
+    scenarios(tmp_path)
+    done = pytest_run(tmp_path, "-q")
+    assert done.returncode == 0 and "1 passed" in done.stdout            # only the ordinary test
+    both = pytest_run(tmp_path, "-q", "test_unrelated.py", "--osc", "scen/good.osc")
+    assert both.returncode == 0 and "2 passed" in both.stdout
+    missing = pytest_run(tmp_path, "--osc", "nowhere")
+    assert missing.returncode == 4 and "--osc nowhere: no such file or folder" in missing.stderr

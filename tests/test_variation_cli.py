@@ -97,15 +97,17 @@ def test_syntax_error_is_one_message_and_loses_nothing(tmp_path):
     assert len(list((tmp_path / "out").glob("*.sce"))) == 6
 
 
-def test_bad_value_is_reported_and_skipped(tmp_path):
+def test_a_bad_value_writes_nothing_and_is_quoted_as_written(tmp_path):
+    """All or nothing (issue 22 item 4): a typo in one value must not leave a partial set of variants."""
     text = TWO_KEEPS.replace("keep(it.msg in ['B1', 'B2', 'B3'])", "keep(it.msg in ['B1', nope, 'B3'])")
     (tmp_path / "main.osc").write_text(text)
     result = run(tmp_path, "main.osc")
     assert result.returncode == 1
-    assert "main.osc:8:35: error: test.log[1].msg = nope does not resolve" in result.stderr
-    assert "skipped variant 1" in result.stderr and "skipped variant 4" in result.stderr
-    assert sorted(p.name for p in (tmp_path / "out").glob("*.sce")) == [
-        "main0.sce", "main2.sce", "main3.sce", "main5.sce"]
+    assert "main.osc:8:35: error: test.log[1].msg = nope does not resolve: unknown name 'nope'" in result.stderr
+    assert "            keep(it.msg in ['B1', nope, 'B3'])\n" in result.stderr          # the line as written
+    assert "2 of 6 combination(s) hold a value that does not resolve; nothing was written" in result.stderr
+    assert not list((tmp_path / "out").glob("*.sce")) if (tmp_path / "out").exists() else True
+    assert _store_rows(tmp_path).get("variants", 0) == 0 if (tmp_path / ".scenario_store.db").exists() else True
     assert "Traceback" not in result.stderr
 
 

@@ -26,7 +26,7 @@ def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
 
 
 def names(folder: Path) -> list[str]:
-    return sorted(p.name for p in folder.iterdir())
+    return sorted(p.name for p in folder.iterdir() if not p.name.startswith("."))
 
 
 def test_second_source_into_the_same_folder_keeps_the_first(tmp_path):

@@ -146,15 +146,16 @@ def test_samplers_need_a_sample_size(tmp_path):
     assert "--strategy lhs needs --samples N" in done.stderr
 
 
-def test_a_value_that_does_not_resolve_is_never_chosen_and_its_tuples_are_impossible(tmp_path):
+def test_a_value_that_does_not_resolve_stops_every_strategy_before_writing(tmp_path):
     (tmp_path / "b.osc").write_text(
         "import osc.helpers\nscenario b:\n    x: int = 0 with:\n        keep(it in [1, 2, 'three'])\n"
         "    y: int = 0 with:\n        keep(it in [1, 2])\n    z: int = 0 with:\n        keep(it in [1, 2])\n"
         "    do serial:\n        log(x)\n")
     done = vary(tmp_path, "b.osc", "--strategy", "pairwise", "--seed", "1")
-    rows = assignments(tmp_path / "out")
-    assert rows and all(r["x"] in (1, 2) for r in rows)
-    assert "(4 impossible: they hold a value that does not resolve)" in done.stdout
+    assert done.returncode == 1
+    assert "b.x = 'three' does not resolve" in done.stderr and "nothing was written" in done.stderr
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.sce"))
+    assert "(4 impossible: they hold a value that does not resolve)" in done.stdout   # what the array would cover
 
 
 def test_sobol_points_come_from_scipy(tmp_path):

@@ -127,8 +127,13 @@ def run(request: VariationRequest) -> int:
         report.report_rejections(plan)
         if request.list_only:
             return report.list_assignments(plan)
-        if plan.valid_count() == 0:
-            echo(f"error: none of the {plan.total} combinations resolves; nothing written", err=True)
+        if plan.rejections:
+            # All or nothing: a typo in one value must not leave a partial set of variants that a
+            # pipeline ignoring the exit code would report as the whole.
+            bad = plan.total - plan.valid_count()
+            echo(f"error: {bad} of {plan.total} combination(s) hold a value that does not resolve; nothing was "
+                 "written (every combination is checked before any file is written: fix the value(s) above)",
+                 err=True)
             return 1
         from executor.folder_lock import FolderBusy, FolderLock
 

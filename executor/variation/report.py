@@ -83,13 +83,18 @@ def describe(plan: VariationPlan) -> None:
 
 
 def report_rejections(plan: VariationPlan) -> None:
-    """Each value that does not resolve, with its error and how many combinations it takes out."""
+    """Each value that does not resolve: where it is written (the line as the user wrote it, a caret under
+    the value), why (the resolver's message), and how many combinations hold it."""
+    lines = plan.text.splitlines()
     for rejection in plan.rejections:
         values = ", ".join(f"{k} = {v}" for k, v in rejection.shown.items())
         where = f"{rejection.location}: " if rejection.location is not None else f"{plan.path}: "
-        echo(f"{where}error: {values} does not resolve; {rejection.skipped} combination(s) with it skipped",
-             err=True)
-        echo("  " + rejection.error.render().replace("\n", "\n  "), err=True)
+        echo(f"{where}error: {values} does not resolve: {rejection.error.message} "
+             f"({rejection.skipped} combination(s) hold it)", err=True)
+        location = rejection.location
+        if location is not None and 1 <= location.line <= len(lines):
+            echo("    " + lines[location.line - 1].strip("\n"), err=True)
+            echo("    " + " " * (location.column - 1) + "^", err=True)
 
 
 def list_assignments(plan: VariationPlan) -> int:

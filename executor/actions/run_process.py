@@ -74,7 +74,8 @@ class RunProcess(ActionBase):
         if self.process is None:
             try:
                 self.process = subprocess.Popen(self.command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                                stdin=subprocess.DEVNULL, start_new_session=True)
+                                                stdin=subprocess.DEVNULL, start_new_session=True,
+                                                preexec_fn=_default_signals)
             except OSError as exc:
                 self.feedback_message = f"cannot start {shlex.join(self.command)}: {exc}"
                 self.logger.error(self.feedback_message)
@@ -151,3 +152,12 @@ class RunProcess(ActionBase):
             self._signal(process, signal.SIGKILL)
         for reader in self._readers:
             reader.join(0.5)
+
+
+def _default_signals() -> None:
+    """In the child: SIGINT and SIGTERM do what they do by default, even when we were started with them
+    ignored (``nohup``, a background job of a script), so ``shutdown_signal`` stops the process."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)

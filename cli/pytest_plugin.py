@@ -142,7 +142,7 @@ def _failure_message(report: Path, log: str) -> str:
         from defusedxml import ElementTree
 
         root = ElementTree.parse(str(report)).getroot()
-        for case in root.iter("testcase"):
+        for case in root.iter("testcase") if root is not None else ():
             for tag in ("failure", "error"):
                 found = case.find(tag)
                 if found is not None and found.get("message"):

@@ -73,7 +73,7 @@ def resolve_expression(expr: syntax.Expression, scope: Scope, expected: OscType 
         unit = scope.ctx.namespace.units.get(expr.unit)
         if unit is None:
             raise NameLookupError(f"unknown unit '{expr.unit}'", expr.location)
-        return TypedExpr(model.Const(float(expr.number) * unit.factor + unit.offset), unit.physical, True)
+        return TypedExpr(model.Const(physical_value(expr.number, unit.factor, unit.offset)), unit.physical, True)
     if isinstance(expr, syntax.Identifier):
         return _identifier(expr, scope, expected)
     if isinstance(expr, syntax.MemberAccess):
@@ -169,17 +169,41 @@ def _list(expr: syntax.ListExpr, scope: Scope, expected: OscType | None) -> Type
     items = [resolve_expression(i, scope, element_expected) for i in expr.items]
     if element_expected is not None:
         element = element_expected
-    elif items:
-        element = items[0].type
     else:
-        element = ANY
-    converted = [coerce(item, element, item_expr.location, f"list element {n}")
+        element = _common_element(items, mixed_ok=expected is STRING or expected is ANY)
+    # An int among floats is a float by type, but keeps its value as written (printed ``[-3, -0.5]``).
+    converted = [TypedExpr(item.expr, FLOAT, item.is_literal) if element is FLOAT and item.type in (INT, UINT)
+                 else coerce(item, element, item_expr.location, f"list element {n}")
                  for n, (item, item_expr) in enumerate(zip(items, expr.items, strict=True))]
     ltype = ListType(element)
     literal = all(i.is_literal for i in converted)
     if all(i.is_const for i in converted):
         return TypedExpr(model.Const([i.value for i in converted]), ltype, literal)
     return TypedExpr(model.MakeList(tuple(i.expr for i in converted)), ltype, False)
+
+
+def _common_element(items: list[TypedExpr], mixed_ok: bool) -> OscType:
+    """The element type of a list literal without an expected one: int promotes to float (as in any numeric
+    context); elements of different kinds make a mixed list only where any value is accepted (``log``'s
+    message prints whatever it gets), else the first element's type decides and the others are checked."""
+    kinds = [i.type for i in items]
+    if all(t in (INT, UINT, FLOAT) for t in kinds) and FLOAT in kinds:
+        return FLOAT
+    if mixed_ok and any(t is not kinds[0] for t in kinds):
+        return ANY
+    return kinds[0]
+
+
+def physical_value(number: int | float, factor: float, offset: float) -> int | float:
+    """A physical literal's value in SI base units, keeping the number kind it was written with: ``3s`` is
+    3 and ``2min`` 120 (ints), ``2.0s`` 2.0 and ``200ms`` 0.2 (floats), so it prints as the reference prints
+    it (log checks and process_log_check patterns depend on that)."""
+    value = number * factor + offset
+    if isinstance(number, int) and not isinstance(number, bool):
+        rounded = round(value)
+        if abs(value - rounded) < 1e-9 * max(1.0, abs(value)):
+            return int(rounded)
+    return float(value)
 
 
 def _enum_value(expr: syntax.EnumValueRef, scope: Scope, expected: OscType | None) -> TypedExpr:

@@ -1,0 +1,47 @@
+"""Everyday forms of scenario files written for the reference (issues 10 and 20), through the real CLI."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+EXE = str(Path(sys.executable).parent / "scenario_execution")
+
+
+def run(tmp_path: Path, text: str, *args: str, name: str = "s.osc") -> subprocess.CompletedProcess:
+    (tmp_path / name).write_text(text)
+    return subprocess.run([EXE, name, *args], cwd=tmp_path, capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, NO_COLOR="1"))
+
+
+def logged(done: subprocess.CompletedProcess) -> list[str]:
+    return [line.split("[log] ", 1)[1] for line in (done.stdout + done.stderr).splitlines() if "[log] " in line]
+
+
+def test_numbers_print_the_way_they_were_written(tmp_path):
+    done = run(tmp_path, "import osc.helpers\nscenario s:\n    do serial:\n        log(3s)\n        log(2.0s)\n"
+                         "        log(2min)\n        log(200ms)\n        log(10km)\n        log([-3, -0.5])\n")
+    assert done.returncode == 0, done.stderr
+    assert logged(done) == ["3", "2.0", "120", "0.2", "10000", "[-3, -0.5]"]
+
+
+def test_list_literals_promote_ints_and_mix_kinds_where_anything_prints(tmp_path):
+    done = run(tmp_path, 'import osc.helpers\nscenario s:\n    count: int = 3\n    xs: list of float = [1, 2.5]\n'
+                         '    do serial:\n        log([1, 2.5])\n        log([count, "label"])\n        log([250ms, 3km])\n'
+                         '        log(xs)\n')
+    assert done.returncode == 0, done.stderr
+    assert logged(done) == ["[1, 2.5]", "[3, 'label']", "[0.25, 3000]", "[1.0, 2.5]"]
+
+
+@pytest.mark.parametrize(("member", "message", "column"), [
+    ('    xs: list of int = [1, "a"]\n', "list element 1: expected int, got string", 27),
+    ("    xs: list of int = [1, 2.5]\n", "list element 1: expected int, got float", 27),
+])
+def test_typed_lists_still_check_each_element_at_its_place(tmp_path, member, message, column):
+    done = run(tmp_path, "import osc.helpers\nscenario s:\n" + member + "    do serial:\n        log(xs)\n", "-n")
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"s.osc:3:{column}: error: {message}")

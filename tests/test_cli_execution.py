@@ -324,11 +324,19 @@ def test_parameter_file_errors_name_the_file_and_key(tmp_path, text, expected):
     assert expected in ET.parse(tmp_path / "out/test.xml").getroot().find(".//failure").text
 
 
-def test_empty_parameter_document_runs_defaults_and_says_so_once(tmp_path):
+def test_empty_parameter_documents_add_no_run(tmp_path):
+    """Issue 10 item 8: a leading, trailing or middle '---' with nothing in it is not a run."""
     write(tmp_path, "x.osc", PARAMETERISED)
-    write(tmp_path, "p.yaml", "x:\n  label: label is 2\n---\n---\nx:\n  label: label is 3\n")
+    write(tmp_path, "p.yaml", "---\nx:\n  label: label is 2\n---\n---\nx:\n  label: label is 3\n---\n")
     done = run_cli("x.osc", "--scenario-parameter-file", "p.yaml", cwd=tmp_path)
     assert done.returncode == 0, done.stdout
-    assert done.stdout.count("document 2 is empty: scenarios run with their defaults") == 1
-    assert done.stdout.count("is empty") == 1
-    assert done.stdout.index("label is 2") < done.stdout.index("label is 1") < done.stdout.index("label is 3")
+    assert "label is 1" not in done.stdout
+    assert done.stdout.index("label is 2") < done.stdout.index("label is 3")
+    assert "Executing scenario 'x-0'" in done.stdout and "Executing scenario 'x-1'" in done.stdout
+    assert "x-2" not in done.stdout
+    write(tmp_path, "one.yaml", "---\nx:\n  label: label is 2\n---\n")
+    single = run_cli("x.osc", "--scenario-parameter-file", "one.yaml", cwd=tmp_path)
+    assert "Executing scenario 'x'" in single.stdout and "x-0" not in single.stdout
+    write(tmp_path, "none.yaml", "")
+    empty = run_cli("x.osc", "--scenario-parameter-file", "none.yaml", cwd=tmp_path)
+    assert empty.returncode == 0 and "label is 1" in empty.stdout

@@ -15,7 +15,8 @@ from coverage_engine.resolve.model import EnumValue, ScenarioFile
 
 
 def read_parameter_documents(path: str | Path) -> list[dict]:
-    """The documents of a parameter file, in order; an empty file is one empty document.
+    """The non-empty documents of a parameter file, in order; a file without any is one empty document
+    (the scenarios run once with their defaults). Empty documents (a leading or trailing ``---``) add no run.
 
     A key written twice in one mapping is an error at its second place (PyYAML alone keeps the last).
     """
@@ -65,17 +66,15 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
         problem = getattr(exc, "problem", None) or str(exc)
         line = text.splitlines()[mark.line] if mark is not None and mark.line < len(text.splitlines()) else None
         raise ParameterFileError(f"invalid YAML: {problem}", where, source_line=line) from exc
-    if not documents:
-        return [{}]
     result: list[dict] = []
     for index, doc in enumerate(documents):
-        if doc is None:
-            doc = {}
+        if doc is None or doc == {}:
+            continue              # a leading or trailing '---', or an empty document, adds no run
         if not isinstance(doc, dict):
             raise ParameterFileError(f"document {index + 1} must be a mapping of scenario names to "
                                      f"parameters, got {type(doc).__name__}", whole_file)
         result.append(doc)
-    return result
+    return result or [{}]
 
 
 def template_values(scenario_file: ScenarioFile) -> dict[str, dict[str, object]]:

@@ -45,3 +45,14 @@ def test_typed_lists_still_check_each_element_at_its_place(tmp_path, member, mes
     done = run(tmp_path, "import osc.helpers\nscenario s:\n" + member + "    do serial:\n        log(xs)\n", "-n")
     assert done.returncode == 1
     assert done.stderr.startswith(f"s.osc:3:{column}: error: {message}")
+
+
+def test_process_log_check_finds_a_process_by_its_label_only(tmp_path):
+    """Issue 20 item 2: an unlabelled run_process is not found under its action's name."""
+    unlabelled = run(tmp_path, 'import osc.helpers\nscenario s:\n    do parallel:\n        run_process("printf READY")\n'
+                               '        process_log_check("run_process", ["READY"])\n')
+    assert unlabelled.returncode == 1
+    assert "no run_process labelled 'run_process'" in unlabelled.stdout + unlabelled.stderr
+    labelled = run(tmp_path, 'import osc.helpers\nscenario s:\n    do parallel:\n        srv: run_process("printf READY")\n'
+                             '        process_log_check("srv", ["READY"])\n', name="t.osc")
+    assert labelled.returncode == 0, labelled.stdout + labelled.stderr

@@ -191,7 +191,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         arguments.append((name, value.expr))
     plugin_names = tuple(t.name for t in action.ancestry())
     call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
-                            node.location)
+                            node.location, node.label is not None)
     return apply_modifiers(call, modifiers, scope)
 
 

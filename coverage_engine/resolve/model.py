@@ -157,6 +157,8 @@ class ActionCall(Record):
     arguments: tuple[tuple[str, Expr], ...]
     actor: Expr | None
     location: Location
+    #: Whether ``name`` is a label the scenario wrote (``ready: run_process(...)``), not the action's own name.
+    labelled: bool = False
 
 
 @record

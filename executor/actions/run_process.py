@@ -47,7 +47,10 @@ class RunProcess(ActionBase):
 
     def setup(self, **kwargs) -> None:
         context = kwargs.get("context")
-        if context is not None:
+        # process_log_check finds a process by the label the scenario gave it (as the reference does): an
+        # unlabelled run_process is not found under its action name. The builder sets osc_labelled; a
+        # behaviour made elsewhere (a test, a plugin) counts as labelled by its name.
+        if context is not None and getattr(self, "osc_labelled", True):
             context.processes.setdefault(self.name, []).append(self)
 
     def execute(self, command: object = None, wait_for_shutdown: bool = True,

@@ -56,3 +56,15 @@ def test_process_log_check_finds_a_process_by_its_label_only(tmp_path):
     labelled = run(tmp_path, 'import osc.helpers\nscenario s:\n    do parallel:\n        srv: run_process("printf READY")\n'
                              '        process_log_check("srv", ["READY"])\n', name="t.osc")
     assert labelled.returncode == 0, labelled.stdout + labelled.stderr
+
+
+@pytest.mark.parametrize("name", ["kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor"])
+def test_asam_keywords_are_not_names(tmp_path, name):
+    """Issue 10 item 6: SI base unit names and 'factor' cannot name a parameter or variable."""
+    done = run(tmp_path, f"import osc.helpers\nscenario t:\n    {name}: float = 1.0\n    do serial:\n        log('x')\n",
+               "-n")
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"s.osc:3:5: error: '{name}' is a keyword of the language")
+    fine = run(tmp_path, f"import osc.helpers\nscenario t:\n    {name}_count: int = 1\n    var {name}3: int = 2\n"
+                         f"    do serial:\n        log({name}_count)\n", "-n", name="ok.osc")
+    assert fine.returncode == 0, fine.stderr

@@ -193,16 +193,16 @@ def test_overrides_convert_to_declared_types(tmp_path):
         scenario test:
             l: length = 1.0m
             f: float = 1.0
-            s: string = "x"
+            t: string = "x"
             p: pair
             c: colour = colour!red
             n: list of pair
             do log("x")
         """
-    sf = load(tmp_path, text, {"test": {"l": 3, "f": 42, "s": 4.5, "p": {"b": 2}, "c": "green",
+    sf = load(tmp_path, text, {"test": {"l": 3, "f": 42, "t": 4.5, "p": {"b": 2}, "c": "green",
                                         "n": [{"a": "q"}]}})
     values = sf.scenarios[0].parameter_values()
-    assert values == {"l": 3.0, "f": 42.0, "s": "4.5", "p": {"a": "a", "b": 2.0}, "c": EnumValue("green", 1),
+    assert values == {"l": 3.0, "f": 42.0, "t": "4.5", "p": {"a": "a", "b": 2.0}, "c": EnumValue("green", 1),
                       "n": [{"a": "q", "b": 1.0}]}
     assert isinstance(values["f"], float)
 
@@ -235,8 +235,8 @@ def test_relative_import_and_unknown_library(tmp_path):
     sf = load(tmp_path, """
         import "lib.osc"
         scenario sc:
-            s: shared
-            do log(s.v)
+            sh: shared
+            do log(sh.v)
         """)
     assert logged(sf.scenarios[0]) == [5]
     with pytest.raises(OscError, match="osc.nope"):

@@ -99,7 +99,7 @@ scenario r:
         keep(it in [10kph..30kph])
     g: float = 1.0 with:
         keep(it in range(0.5, 2.5))
-    m: string = "a" with:
+    mode: string = "a" with:
         keep(it in ["a", "b", "c"])
     do serial:
         log(v)
@@ -116,7 +116,7 @@ def test_samplers_draw_continuous_ranges_inside_their_ends(tmp_path, strategy):
     speeds = [float(r["v"]) for r in rows]
     gaps = [float(r["g"]) for r in rows]
     assert all(10 <= s <= 30 for s in speeds) and all(0.5 <= g <= 2.5 for g in gaps)
-    assert {r["m"] for r in rows} <= {"a", "b", "c"}
+    assert {r["mode"] for r in rows} <= {"a", "b", "c"}
     if strategy == "lhs":          # one value in each of the 20 equal strata of each range
         assert sorted(int((s - 10) / 20 * 20) for s in speeds) == list(range(20))
         assert sorted(int((g - 0.5) / 2 * 20) for g in gaps) == list(range(20))

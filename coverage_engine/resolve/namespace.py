@@ -160,6 +160,7 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
     for member in members:
         if isinstance(member, syntax.ParameterDecl):
             ftype = ns.lookup_type(member.type)
+            _check_names(member.names, member.location, "parameter")
             for name in member.names:
                 ctype.fields[name] = FieldDecl(name, ftype, member.default, member.with_members, ctype,
                                                member.location)
@@ -169,6 +170,7 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
                         ctype.coverage.append((item, name))
         elif isinstance(member, syntax.VariableDecl):
             vtype = ns.lookup_type(member.type)
+            _check_names(member.names, member.location, "variable")
             for name in member.names:
                 ctype.variables[name] = VarDecl(name, vtype, member.default, ctype, member.location)
         elif isinstance(member, syntax.EventDecl):
@@ -200,3 +202,15 @@ def _check_coverage_owner(ctype: CompoundType, decl: syntax.CoverageDecl) -> Non
         raise UnsupportedFeatureError(f"not supported: {decl.kind}() in {ctype.kind} '{ctype.qualified}' (declare it "
                                       f"in the scenario, with expression: naming the {ctype.kind}'s member)",
                                       decl.location)
+
+
+#: Keywords of the ASAM OpenSCENARIO DSL 2 grammar that look like names: the SI base unit names and
+#: ``factor`` (unit declarations). A member cannot be called one of them (``s_count``, ``mol3`` are fine).
+RESERVED_NAMES = frozenset({"kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor"})
+
+
+def _check_names(names: tuple[str, ...], location: Location, what: str) -> None:
+    for name in names:
+        if name in RESERVED_NAMES:
+            raise ResolveError(f"'{name}' is a keyword of the language (an SI base unit name or 'factor'), not a "
+                               f"{what} name; choose another name (e.g. '{name}_value')", location)

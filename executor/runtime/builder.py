@@ -62,7 +62,7 @@ def build_behavior(node: Behavior, context: ScenarioContext) -> py_trees.behavio
     """
     behaviour = _build(node, context)
     behaviour.osc_location = getattr(node, "location", None)
-    behaviour.osc_labelled = bool(getattr(node, "labelled", False))
+    behaviour.osc_labelled = bool(getattr(node, "labelled", False))  # type: ignore[attr-defined]
     return behaviour
 
 

@@ -84,3 +84,17 @@ def test_a_job_folder_planted_as_a_link_is_not_written_through(tmp_path):
     cases = {c.get("name"): c for c in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testcase")}
     assert cases["good"].find("failure") is None and cases["good"].find("error") is None
     assert cases["planted"].find("error") is not None
+
+
+def test_a_result_that_is_a_link_to_a_secret_is_never_read(tmp_path):
+    """Issue 11 item 5: a child (or a neighbour) making test.xml or log.txt a link cannot leak a file."""
+    secret = tmp_path / "secret.txt"
+    secret.write_text("<testsuite><testcase name='TOPSECRET'/></testsuite>")
+    write_scenarios(tmp_path / "in", {"sneaky": "x"})
+    script = (f"ln -s {secret} {{OUTPUT_DIR}}/test.xml; rm -f {{OUTPUT_DIR}}/log.txt; "
+              f"ln -s {secret} {{OUTPUT_DIR}}/log.txt; echo {{SCENARIO}} > /dev/null")
+    done = run_cli(["-i", "in", "-o", "results", "--", "sh", "-c", script], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 1, done.stdout + done.stderr
+    report = (tmp_path / "results" / "test.xml").read_text()
+    assert "TOPSECRET" not in report and "TOPSECRET" not in done.stdout + done.stderr
+    assert "test.xml is a symbolic link: not followed" in report

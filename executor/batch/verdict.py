@@ -10,6 +10,7 @@ repeated.
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,10 +46,24 @@ class FileMark:
         return FileMark.of(path).signature not in (None, self.signature)
 
 
+class NotARegularFile(OSError):
+    """A file a child left that is a symbolic link or not a regular file (never followed, never read)."""
+
+
+def open_child_file(path: Path):
+    """Open a file a child wrote for reading, without following a symbolic link: a child (or anyone who can
+    write into its folder) could otherwise make ``test.xml`` point at a secret that the report would carry."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise NotARegularFile(f"{path.name} is not a regular file")
+    return os.fdopen(fd, "rb")
+
+
 def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
     """The last ``limit`` bytes of a log, decoded leniently and cleaned for XML and the store."""
     try:
-        with open(path, "rb") as handle:
+        with open_child_file(path) as handle:
             handle.seek(0, os.SEEK_END)
             size = handle.tell()
             handle.seek(max(0, size - limit))
@@ -65,13 +80,16 @@ def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[Case], str
     """The test.xml the attempt wrote (text or None, its testcases) and why it cannot be used (None if it can)."""
     if not mark.changed(path):
         return None, [], "no test.xml written"
+    if path.is_symlink():
+        return None, [], "test.xml is a symbolic link: not followed (a result must be a file in the job's folder)"
     try:
-        size = path.stat().st_size
-        if size > JUNIT_MAX_BYTES:
-            return None, [], f"test.xml is {size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
-        text = path.read_bytes().decode("utf-8", errors="replace")
+        with open_child_file(path) as handle:
+            size = os.fstat(handle.fileno()).st_size
+            if size > JUNIT_MAX_BYTES:
+                return None, [], f"test.xml is {size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
+            text = handle.read().decode("utf-8", errors="replace")
     except OSError as exc:
-        return None, [], f"cannot read test.xml: {exc.strerror}"
+        return None, [], f"cannot read test.xml: {exc.strerror or exc}"
     try:
         cases = read_cases(text)
     except JunitUnreadable as exc:
@@ -90,9 +108,10 @@ def read_coverage(path: Path, mark: FileMark) -> str | None:
     if not mark.changed(path):
         return None
     try:
-        if path.stat().st_size > COVERAGE_MAX_BYTES:
-            return None
-        return path.read_text(encoding="utf-8", errors="replace")
+        with open_child_file(path) as handle:
+            if os.fstat(handle.fileno()).st_size > COVERAGE_MAX_BYTES:
+                return None
+            return handle.read().decode("utf-8", errors="replace")
     except OSError:
         return None
 

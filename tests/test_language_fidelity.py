@@ -68,3 +68,17 @@ def test_asam_keywords_are_not_names(tmp_path, name):
     fine = run(tmp_path, f"import osc.helpers\nscenario t:\n    {name}_count: int = 1\n    var {name}3: int = 2\n"
                          f"    do serial:\n        log({name}_count)\n", "-n", name="ok.osc")
     assert fine.returncode == 0, fine.stderr
+
+
+@pytest.mark.parametrize("name", ["end", "fail", "finish"])
+def test_a_built_in_event_cannot_be_declared(tmp_path, name):
+    """Issue 10 item 5: events are checked when the file is resolved."""
+    done = run(tmp_path, f"import osc.helpers\nscenario t:\n    event {name}\n    do serial:\n        log('x')\n", "-n")
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"s.osc:3:5: error: '{name}' is a built-in event of every scenario")
+
+
+def test_emitting_an_undeclared_event_is_an_error_at_its_place(tmp_path):
+    done = run(tmp_path, "import osc.helpers\nscenario t:\n    event go\n    do serial:\n        emit og\n", "-n")
+    assert done.returncode == 1
+    assert done.stderr.startswith("s.osc:5:9: error: unknown event 'og'")

@@ -174,6 +174,9 @@ def _add_members(ns: Namespace, ctype: CompoundType, members: tuple) -> None:
             for name in member.names:
                 ctype.variables[name] = VarDecl(name, vtype, member.default, ctype, member.location)
         elif isinstance(member, syntax.EventDecl):
+            if member.name in ("end", "fail", "finish"):
+                raise ResolveError(f"'{member.name}' is a built-in event of every scenario; declare an event with "
+                                   "another name", member.location)
             ctype.events[member.name] = member
         elif isinstance(member, syntax.MethodDecl):
             ctype.methods[member.name] = member

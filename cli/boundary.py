@@ -51,6 +51,14 @@ class Boundary:
         """Run ``command`` with ``args`` (default: the process's) and exit with its code."""
         sys.exit(self.run(command, args))
 
+    def report(self, exc: Exception) -> int:
+        """Say one error of a command that goes on after it (one of several input files); its exit code."""
+        if isinstance(exc, OscError):
+            self._say(exc.render() if self.one_line_name is None else str(exc))
+        else:
+            self._say(f"error: {exc}")
+        return EXIT_FAILED
+
     def run(self, command: click.Command, args: Sequence[str] | None = None) -> int:
         """Run ``command``; returns its exit code (the callback's int, or the code of what escaped)."""
         argv = list(sys.argv[1:] if args is None else args)

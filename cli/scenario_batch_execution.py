@@ -90,7 +90,10 @@ def _typed_options() -> list[str]:
 
     ctx = click.get_current_context()
     typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)
-    return [name for name in ("input_dir", *OPTION_FLAGS) if ctx.get_parameter_source(name) in typed]
+    given = [name for name in OPTION_FLAGS if ctx.get_parameter_source(name) in typed]
+    if ctx.get_parameter_source("input_dirs") in typed:
+        given.insert(0, "input_dir")
+    return given
 
 
 def _check_post_run(hooks) -> None:
@@ -106,7 +109,9 @@ def _check_post_run(hooks) -> None:
 
 @click.command(context_settings={**CONTEXT, "allow_interspersed_args": False})
 @click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
-@click.option("-i", "--input-dir", type=click.Path(file_okay=False), help="Folder with the .sce/.osc files.")
+@click.option("-i", "--input-dir", "input_dirs", multiple=True, type=click.Path(file_okay=False),
+              help="Folder with the .sce/.osc files (repeat -i for several folders).")
+@click.option("--recursive", is_flag=True, help="Take the scenario files of the input folders' subfolders too.")
 @click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
               help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
@@ -134,7 +139,7 @@ def _check_post_run(hooks) -> None:
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
-def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
+def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
                 ignore_return_value, post_run, enqueue_only, lease, wait, rerun_failed, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
@@ -146,6 +151,8 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
     from executor.batch import orchestration
     from executor.batch.progress import make_reporter
     from store.jobs import BatchOptions
+
+    input_dir = input_dirs[0] if input_dirs else None
 
     if rerun_failed and (resume or enqueue_only or input_dir is not None or command):
         raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the latest batch's "
@@ -159,7 +166,7 @@ def run_command(input_dir, output_dir, slots, timeout, grace, retries, resume, s
         input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace),
-        shard=shard)
+        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
     store = _open_store(store_url)
     lock = None
     try:

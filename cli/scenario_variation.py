@@ -48,20 +48,50 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
                    "when left out.")
 @click.option("--wait", is_flag=True,
               help="When another run writes into the output folder, wait for it instead of stopping.")
-@click.argument("scenario", type=click.Path(dir_okay=False))
-def command(scenario, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
+@click.argument("scenarios", nargs=-1, required=True, type=click.Path())
+@click.pass_context
+def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
             strategy, strength, samples, seed, wait):
-    """Generate concrete scenarios (.sce) from the values listed or ranged in SCENARIO (.osc).
+    """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
+    folder: its .osc files).
 
     Every keep(it.<param> in [v1, v2, ...]) or keep(it.<param> in [low..high]) is one dimension; with the
     default --strategy full every combination is written, the first dimension varying slowest.
     """
+    from coverage_engine.errors import OscError
     from executor.variation.generation import run
 
-    return run(VariationRequest(
-        scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
-        log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
-        strength=strength, samples=samples, seed=seed, wait=wait))
+    files = _scenario_files(scenarios)
+    code = 0
+    for scenario in files:
+        request = VariationRequest(
+            scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
+            log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
+            strength=strength, samples=samples, seed=seed, wait=wait)
+        if len(files) == 1:
+            return run(request)
+        try:                     # several files: each is done on its own; one that fails stops only itself
+            code = max(code, run(request))
+        except (OscError, VariationStoreError, OSError) as exc:
+            code = max(code, ctx.obj.report(exc))
+    return code
+
+
+def _scenario_files(given: tuple[str, ...]) -> list[str]:
+    """The files to vary: each file as given, each folder's ``.osc`` files in name order."""
+    from pathlib import Path
+
+    files: list[str] = []
+    for item in given:
+        path = Path(item)
+        if path.is_dir():
+            found = sorted(str(p) for p in path.iterdir() if p.suffix == ".osc" and p.is_file())
+            if not found:
+                raise click.UsageError(f"{item}: a folder without .osc files")
+            files += found
+        else:
+            files.append(item)
+    return files
 
 
 def main(args: list[str] | None = None) -> None:

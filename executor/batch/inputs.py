@@ -33,22 +33,40 @@ def natural_key(name: str) -> tuple:
     return tuple((1, int(part), part) if index % 2 else (0, part, "") for index, part in enumerate(parts))
 
 
-def discover(input_dir: str | os.PathLike[str]) -> list[Path]:
-    """The .sce and .osc files directly in ``input_dir`` in natural order of their names (``cut2`` before
-    ``cut10``), which is the order jobs are run and reported in; :class:`NoScenarios` if none."""
-    folder = Path(input_dir)
-    if not folder.is_dir():
-        raise NoScenarios(f"input folder {str(folder)!r} does not exist or is not a folder")
-    files = sorted((p for p in folder.iterdir() if p.suffix in SCENARIO_SUFFIXES and p.is_file()),
-                   key=lambda p: natural_key(p.name))
+def discover(input_dir: str | os.PathLike[str], *more: str | os.PathLike[str], recursive: bool = False) -> list[Path]:
+    """The .sce and .osc files in the input folders, each folder's in natural order of their names (``cut2``
+    before ``cut10``), folders in the order given: the order jobs are run and reported in.
+
+    ``recursive`` takes the files of every subfolder too (depth first, natural order). :class:`NoScenarios`
+    when a folder is missing or none holds a scenario, or when two files would share a job folder (the
+    same stem: a ``.sce`` and an ``.osc``, or one name in two folders).
+    """
+    files: list[Path] = []
+    for given in (input_dir, *more):
+        folder = Path(given)
+        if not folder.is_dir():
+            raise NoScenarios(f"input folder {str(folder)!r} does not exist or is not a folder")
+        files += _scenario_files(folder, recursive)
     if not files:
-        raise NoScenarios(f"no .sce or .osc file in {str(folder)!r}")
-    names = [p.stem for p in files]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
-    if duplicates:
-        raise NoScenarios(f"{', '.join(duplicates)}: a .sce and an .osc file share a name, "
-                          "their output folders would collide")
+        shown = ", ".join(repr(str(f)) for f in (input_dir, *more))
+        raise NoScenarios(f"no .sce or .osc file in {shown}" + ("" if recursive else " (--recursive looks in subfolders)"))
+    seen: dict[str, Path] = {}
+    for path in files:
+        if path.stem in seen:
+            raise NoScenarios(f"{path.stem}: {seen[path.stem]} and {path} share a name, their output folders "
+                              "would collide")
+        seen[path.stem] = path
     return files
+
+
+def _scenario_files(folder: Path, recursive: bool) -> list[Path]:
+    entries = sorted(folder.iterdir(), key=lambda p: natural_key(p.name))
+    found = [p for p in entries if p.suffix in SCENARIO_SUFFIXES and p.is_file()]
+    if recursive:
+        for sub in entries:
+            if sub.is_dir() and not sub.is_symlink() and not sub.name.startswith("."):
+                found += _scenario_files(sub, True)
+    return found
 
 
 @dataclass(frozen=True)

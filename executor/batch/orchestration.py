@@ -45,6 +45,9 @@ class BatchRequest:
     command: tuple[str, ...]
     options: BatchOptions
     shard: Shard | None = None
+    #: More input folders after ``input_dir`` (``-i a -i b``), and whether subfolders count.
+    more_inputs: tuple[str, ...] = ()
+    recursive: bool = False
 
 
 def output_folder(path: str) -> str:
@@ -66,7 +69,7 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
     """Discover the scenario files, keep the shard's share, and enqueue one job per file."""
     if request.input_dir is None:
         raise BatchError("-i/--input-dir is required (except with --resume)")
-    files = discover(request.input_dir)
+    files = discover(request.input_dir, *request.more_inputs, recursive=request.recursive)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
     specs = job_specs(files, request.shard)

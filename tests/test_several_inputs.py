@@ -1,0 +1,60 @@
+"""Several scenario files and folders in one command (issue 22 item 3), through the real CLIs."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
+
+BIN = Path(sys.executable).parent
+ONE = "import osc.helpers\nscenario {name}:\n    do serial:\n        log() with:\n            keep(it.msg in ['a', 'b'])\n"
+
+
+def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    return subprocess.run([str(BIN / "scenario_variation"), *args], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_variation_takes_files_and_folders_into_one_output(tmp_path):
+    (tmp_path / "cut.osc").write_text(ONE.format(name="cut"))
+    (tmp_path / "more").mkdir()
+    (tmp_path / "more" / "merge.osc").write_text(ONE.format(name="merge"))
+    (tmp_path / "more" / "turn.osc").write_text(ONE.format(name="turn"))
+    done = vary(tmp_path, "cut.osc", "more")
+    assert done.returncode == 0, done.stderr
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.sce")) == [
+        "cut0.sce", "cut1.sce", "merge0.sce", "merge1.sce", "turn0.sce", "turn1.sce"]
+
+
+def test_one_bad_file_stops_only_itself(tmp_path):
+    (tmp_path / "good.osc").write_text(ONE.format(name="good"))
+    (tmp_path / "bad.osc").write_text("scenario bad:\n    do serial:\n        log(\n")
+    done = vary(tmp_path, "bad.osc", "good.osc")
+    assert done.returncode == 1
+    assert done.stderr.startswith("bad.osc:")
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.sce")) == ["good0.sce", "good1.sce"]
+
+
+def test_batch_takes_several_input_folders_and_subfolders(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "a", {"one": "xml=pass"})
+    write_scenarios(tmp_path / "b", {"two": "xml=pass"})
+    write_scenarios(tmp_path / "b" / "deeper", {"three": "xml=pass"})
+    env = cli_env(tmp_path)
+    both = run_cli(["-i", "a", "-i", "b", "-o", "r1", "--", *child_command(child)], tmp_path, env)
+    assert both.returncode == 0, both.stderr
+    names = [c.get("name") for c in ET.parse(tmp_path / "r1" / "test.xml").getroot().iter("testcase")]
+    assert names == ["one", "two"]
+    deep = run_cli(["-i", "a", "-i", "b", "--recursive", "-o", "r2", "--", *child_command(child)], tmp_path, env)
+    assert deep.returncode == 0, deep.stderr
+    names = [c.get("name") for c in ET.parse(tmp_path / "r2" / "test.xml").getroot().iter("testcase")]
+    assert names == ["one", "two", "three"]
+    write_scenarios(tmp_path / "c", {"one": "xml=pass"})
+    clash = run_cli(["-i", "a", "-i", "c", "-o", "r3", "--", *child_command(child)], tmp_path, env)
+    assert clash.returncode == 1 and "share a name, their output folders would collide" in clash.stderr

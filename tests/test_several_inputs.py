@@ -58,3 +58,24 @@ def test_batch_takes_several_input_folders_and_subfolders(tmp_path):
     write_scenarios(tmp_path / "c", {"one": "xml=pass"})
     clash = run_cli(["-i", "a", "-i", "c", "-o", "r3", "--", *child_command(child)], tmp_path, env)
     assert clash.returncode == 1 and "share a name, their output folders would collide" in clash.stderr
+
+
+def test_a_file_name_that_is_not_utf8_fails_alone(tmp_path):
+    """Issue 21 item 5: one such name used to stop the whole batch (and variation) with an internal error."""
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"fine": "xml=pass"})
+    (tmp_path / "in" / os.fsdecode(b"bad\xff.sce")).write_text("xml=pass\n")
+    done = run_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 1
+    assert "internal error" not in done.stderr and "Traceback" not in done.stderr
+    assert "bad\\xff.sce: the file name is not UTF-8" in done.stderr
+    cases = {c.get("name"): c for c in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testcase")}
+    assert cases["fine"].find("failure") is None and cases["fine"].find("error") is None
+    assert cases["bad\\xff"].find("failure") is not None or cases["bad\\xff"].find("error") is not None
+
+    (tmp_path / "good.osc").write_text(ONE.format(name="good"))
+    (tmp_path / os.fsdecode(b"odd\xfe.osc")).write_text(ONE.format(name="odd"))
+    varied = vary(tmp_path, "good.osc", os.fsdecode(b"odd\xfe.osc"))
+    assert varied.returncode == 1
+    assert "odd\\xfe.osc: the file name is not UTF-8" in varied.stderr and "internal error" not in varied.stderr
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.sce")) == ["good0.sce", "good1.sce"]

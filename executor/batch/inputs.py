@@ -108,9 +108,32 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
                 text = None
             if text is not None and "\x00" in text:
                 text = None
-        specs.append(JobSpec(name=path.stem, scenario_path=str(path.resolve()), scenario_sha=sha,
-                             scenario_text=text))
+        resolved = str(path.resolve())
+        if not _utf8(resolved):
+            # The store (and every report) holds text: a name that is not UTF-8 is kept escaped, so this job
+            # alone fails (its file is not found under the escaped name) and the others run.
+            specs.append(JobSpec(name=_escaped(path.stem), scenario_path=_escaped(resolved), scenario_sha=sha))
+            continue
+        specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
     return specs
+
+
+def not_utf8(files: Sequence[Path]) -> list[str]:
+    """The files whose names are not UTF-8, escaped for printing (their jobs will fail: rename them)."""
+    return [_escaped(str(p)) for p in files if not _utf8(str(p))]
+
+
+def _utf8(text: str) -> bool:
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
+def _escaped(text: str) -> str:
+    """``text`` with bytes that are not UTF-8 (kept as surrogates) written as ``\\xff``."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def check_command(command: Sequence[str], *, require_executable: bool = True) -> tuple[str, ...]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from executor.batch.errors import BatchError, NothingToResume
-from executor.batch.inputs import Shard, check_command, discover, job_specs
+from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
@@ -70,6 +70,8 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
     if request.input_dir is None:
         raise BatchError("-i/--input-dir is required (except with --resume)")
     files = discover(request.input_dir, *request.more_inputs, recursive=request.recursive)
+    for name in not_utf8(files):
+        print(f"warning: {name}: the file name is not UTF-8; its job fails (rename the file)", file=sys.stderr)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
     specs = job_specs(files, request.shard)

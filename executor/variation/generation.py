@@ -93,6 +93,11 @@ def run(request: VariationRequest) -> int:
     """Generate (or list) the variants of ``request.scenario``; returns the exit code."""
     from coverage_engine.variation.plan import build_plan, check_plan
 
+    try:
+        request.scenario.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = request.scenario.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+        raise OscError(f"{shown}: the file name is not UTF-8; rename the file (nothing was written for it)") from None
     with _terminate_like_interrupt():
         documents = None
         if request.parameter_file is not None:

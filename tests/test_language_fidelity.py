@@ -82,3 +82,18 @@ def test_emitting_an_undeclared_event_is_an_error_at_its_place(tmp_path):
     done = run(tmp_path, "import osc.helpers\nscenario t:\n    event go\n    do serial:\n        emit og\n", "-n")
     assert done.returncode == 1
     assert done.stderr.startswith("s.osc:5:9: error: unknown event 'og'")
+
+
+def test_until_event_ends_the_behaviour_when_the_event_comes(tmp_path):
+    """Issue 10 item 4: 'until @event' in a with: block."""
+    import time
+
+    text = ("import osc.helpers\nscenario s:\n    event go\n    do serial:\n        parallel:\n            serial:\n"
+            "                wait elapsed(0.3s)\n                emit go\n            serial:\n"
+            "                wait elapsed(100s)\n            with:\n                until @go\n        log(\"after\")\n")
+    started = time.monotonic()
+    done = run(tmp_path, text)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert logged(done) == ["after"] and time.monotonic() - started < 20
+    unknown = run(tmp_path, text.replace("until @go", "until @og"), "-n", name="u.osc")
+    assert unknown.returncode == 1 and unknown.stderr.startswith("u.osc:12:23: error: unknown event 'og'")

@@ -50,7 +50,6 @@ def test_inconsistent_dedent_has_a_position():
     ("scenario t:\n    var x: time = sample(a.b, @e.start)\n", "sample()", 2, 19),
     ("scenario t:\n    event e is every(1s)\n", "every()", 2, 16),
     ("scenario t:\n    on @e:\n        emit x\n", "on @event", 2, 5),
-    ("scenario t:\n    do log() with:\n        until @e\n", "until", 3, 9),
     ("namespace foo\n", "namespaces", 1, 1),
     ("enum e: [a]\nextend e: [b]\n", "extending an enum", 2, 1),
     ("actor a inherits b(x == true)\n", "conditional inheritance", 1, 19),

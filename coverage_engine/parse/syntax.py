@@ -197,7 +197,15 @@ class CoverageDecl(Record):
     location: Location
 
 
-WithMember = KeepConstraint | ModifierInvocation | CoverageDecl
+@record
+class Until(Record):
+    """``until @event`` in a behaviour's ``with:`` block (ASAM modifier): the behaviour runs until the event."""
+
+    condition: Expression
+    location: Location
+
+
+WithMember = KeepConstraint | ModifierInvocation | CoverageDecl | Until
 
 
 @record

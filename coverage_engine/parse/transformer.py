@@ -241,7 +241,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         return s.ModifierInvocation(name, arguments, self.loc(children))
 
     def until_stmt(self, children):
-        raise self.unsupported("until", children[0])
+        return s.Until(children[1], self.loc(children))
 
     def on_directive(self, children):
         raise self.unsupported("on @event", children[0])

@@ -66,14 +66,18 @@ def _composite(node: syntax.Composite, scope: Scope) -> model.Behavior:
             modifiers.append(syntax.ModifierInvocation(member.name, member.arguments, member.location))
         else:
             children.append(resolve_behavior(member, scope))
+    untils = []
     for extra in node.with_members:
         if isinstance(extra, syntax.KeepConstraint):
             raise ResolveError(f"'keep' cannot constrain a '{node.kind}'", extra.location)
         if isinstance(extra, syntax.CoverageDecl):
             raise _coverage_misplaced(extra)
+        if isinstance(extra, syntax.Until):
+            untils.append(extra)
+            continue
         modifiers.append(extra)
     composite = model.Composite(node.kind, node.label or node.kind, tuple(children), node.location)
-    return apply_modifiers(composite, modifiers, scope)
+    return apply_until(apply_modifiers(composite, modifiers, scope), untils, scope)
 
 
 def apply_modifiers(behavior: model.Behavior, modifiers: list[syntax.ModifierInvocation],
@@ -158,12 +162,16 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     bound = bind_arguments(list(action.fields), node.arguments, what, node.location)
     keeps = {}
     modifiers: list[syntax.ModifierInvocation] = []
+    untils = []
     for member in node.with_members:
         if isinstance(member, syntax.ModifierInvocation):
             modifiers.append(member)
             continue
         if isinstance(member, syntax.CoverageDecl):
             raise _coverage_misplaced(member)
+        if isinstance(member, syntax.Until):
+            untils.append(member)
+            continue
         keep = extract_keep(member, scope)
         if len(keep.path) != 1 or keep.path[0] not in action.fields:
             if not keep.path:
@@ -192,7 +200,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     plugin_names = tuple(t.name for t in action.ancestry())
     call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
                             node.location, node.label is not None)
-    return apply_modifiers(call, modifiers, scope)
+    return apply_until(apply_modifiers(call, modifiers, scope), untils, scope)
 
 
 def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:
@@ -240,3 +248,17 @@ def _emit(node: syntax.Emit, scope: Scope) -> model.Behavior:
 def _coverage_misplaced(decl: syntax.CoverageDecl) -> ResolveError:
     return ResolveError(f"{decl.kind}() is a member of a scenario (or of a parameter's 'with:' block), not of a "
                         "behaviour's 'with:' block", decl.location)
+
+
+def apply_until(behavior: model.Behavior, untils: list[syntax.Until], scope: Scope) -> model.Behavior:
+    """``until @event``: the behaviour runs until the event is emitted, then succeeds (outside its modifiers)."""
+    for until in untils:
+        condition = until.condition
+        if not isinstance(condition, syntax.EventRef):
+            raise UnsupportedFeatureError("not supported: 'until' with a condition; write 'until @event'",
+                                          condition.location)
+        key = ".".join(condition.path)
+        if key not in scope.events:
+            raise NameLookupError(f"unknown event '{key}'", condition.location)
+        behavior = model.Modified("until", (("event", scope.events[key]),), behavior, until.location)
+    return behavior

@@ -382,7 +382,7 @@ def field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression 
     """The value of a member or global from its default (or its type's zero), with its ``with:`` keeps."""
     keeps = [extract_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
     for m in with_members:
-        if isinstance(m, syntax.ModifierInvocation):
+        if isinstance(m, (syntax.ModifierInvocation, syntax.Until)):
             raise ResolveError(f"a modifier cannot be applied to {what}", m.location)
     whole = [k for k in keeps if not k.path]
     if whole:

@@ -128,6 +128,10 @@ def iter_modifiers(behavior: Behavior | None) -> Iterator[Modified]:
             yield from iter_modifiers(child)
 
 
+#: Modifiers that are keywords of the language rather than declared in a library (``until @event``).
+LANGUAGE_MODIFIERS = ("until",)
+
+
 def check_actions_available(scenarios: Iterable[Scenario]) -> None:
     """Raise for the first invoked action or applied modifier without an implementation."""
     for scenario in scenarios:
@@ -135,7 +139,7 @@ def check_actions_available(scenarios: Iterable[Scenario]) -> None:
             if find_plugin(call) is None:
                 raise _not_found(call)
         for applied in iter_modifiers(scenario.body):
-            if applied.modifier not in BUILTIN_MODIFIERS:
+            if applied.modifier not in BUILTIN_MODIFIERS and applied.modifier not in LANGUAGE_MODIFIERS:
                 raise ModifierNotFoundError(
                     f"modifier '{applied.modifier}' has no implementation (available: "
                     f"{', '.join(BUILTIN_MODIFIERS)})", applied.location)

@@ -43,6 +43,30 @@ class ClockTimeout(decorators.Decorator):
         return self.decorated.status
 
 
+class UntilEvent(decorators.Decorator):
+    """``until @event``: runs the child until the event has been emitted, then stops it and succeeds; a child
+    that ends first ends the decorator with its own status."""
+
+    def __init__(self, name: str, child: py_trees.behaviour.Behaviour, event: str,
+                 context: ScenarioContext) -> None:
+        super().__init__(name=name, child=child)
+        self.event = event
+        self.context = context
+
+    def tick(self):
+        if self.event in self.context.events:       # checked before the child runs again
+            if self.decorated.status == Status.RUNNING:
+                self.decorated.stop(Status.INVALID)
+            self.feedback_message = f"until @{self.event}: the event came"
+            self.stop(Status.SUCCESS)
+            yield self
+            return
+        yield from super().tick()
+
+    def update(self) -> Status:
+        return self.decorated.status
+
+
 _CONVERTERS = {
     "inverter": decorators.Inverter,
     "failure_is_running": decorators.FailureIsRunning,
@@ -82,4 +106,6 @@ def build_modifier(modifier: str, arguments: dict, child: py_trees.behaviour.Beh
         if isinstance(duration, bool) or not isinstance(duration, (int, float)):
             raise ModifierError(f"timeout(): 'duration' must be a time, got {duration!r}")
         return ClockTimeout(name="timeout", child=child, duration=duration, context=context)
+    if modifier == "until":
+        return UntilEvent(name="until", child=child, event=str(arguments.get("event")), context=context)
     raise ModifierError(f"modifier '{modifier}' has no implementation (known: {', '.join(MODIFIERS)})")

@@ -97,3 +97,17 @@ def test_until_event_ends_the_behaviour_when_the_event_comes(tmp_path):
     assert logged(done) == ["after"] and time.monotonic() - started < 20
     unknown = run(tmp_path, text.replace("until @go", "until @og"), "-n", name="u.osc")
     assert unknown.returncode == 1 and unknown.stderr.startswith("u.osc:12:23: error: unknown event 'og'")
+
+
+@pytest.mark.parametrize("number", ["2²", "٣", "①"])
+def test_digits_that_are_not_ascii_are_a_located_error(tmp_path, number):
+    """Found by benchmarks/fuzz_front_end.py: '²' passed str.isdigit() and crashed the lexer."""
+    done = run(tmp_path, f"import osc.helpers\nscenario t:\n    do serial:\n        log({number})\n", "-n")
+    assert done.returncode == 1 and done.stderr.startswith("s.osc:4:") and "Traceback" not in done.stderr
+
+
+def test_a_sce_with_a_control_character_is_a_located_error(tmp_path):
+    (tmp_path / "v.sce").write_text("# scenario_variation .sce, format 1: x\nformat_version: 1\nsource: \x07\n")
+    done = subprocess.run([EXE, "-n", "v.sce"], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 1
+    assert done.stderr.startswith("v.sce:3:9: error: not a valid .sce file: character 0x7 is not allowed")

@@ -324,7 +324,16 @@ def _load_yaml(text: str, path: str):
         location = Location(path, mark.line + 1, mark.column + 1) if mark is not None else None
         raise SceFormatError(f"not a valid .sce file: {exc.problem or exc}", location) from exc
     except yaml.YAMLError as exc:
-        raise SceFormatError(f"{path}: not a valid .sce file: {exc}") from exc
+        position = getattr(exc, "position", None)       # a character YAML does not accept (ReaderError)
+        if isinstance(position, int):
+            line = text.count("\n", 0, position) + 1
+            column = position - (text.rfind("\n", 0, position) + 1) + 1
+            character = getattr(exc, "character", "")
+            code = ord(character) if isinstance(character, str) and len(character) == 1 else character
+            shown = f"{code:#x}" if isinstance(code, int) else "?"
+            raise SceFormatError(f"not a valid .sce file: character {shown} is not allowed in YAML",
+                                 Location(path, line, column)) from None
+        raise SceFormatError(f"not a valid .sce file: {exc}", Location(path, 0, 0)) from exc
 
 
 def _model_first_line(text: str) -> int:

@@ -18,7 +18,8 @@ from coverage_engine.parse.lalr import ParseFailure
 from coverage_engine.parse.tables import NAME_RE, Tables
 
 QUOTED_NAME_RE = re.compile(r"\|[^|\r\n]+\|")
-NUMBER_RE = re.compile(r"0[xX][0-9a-fA-F]+|\d*\.\d+(?:[eE][+-]?\d+)?|\d+")
+#: Numbers are ASCII digits (``str.isdigit`` also accepts '²' and '①', which no number is made of).
+NUMBER_RE = re.compile(r"0[xX][0-9a-fA-F]+|\d*\.\d+(?:[eE][+-]?\d+)?|\d+", re.ASCII)
 STRING_RE = re.compile(
     r'"""(?:[^"\\]|\\[\s\S]|"(?!""))*"""'
     r"|'''(?:[^'\\]|\\[\s\S]|'(?!''))*'''"
@@ -95,8 +96,8 @@ class OscLexer:
                 yield _new_token(kind, value, pos, line, column, line, column + end - pos, end)
                 pos = end
                 continue
-            if char.isdigit() or (char == "." and text[pos + 1:pos + 2].isdigit()
-                                  and text[pos - 1:pos] != "."):
+            if "0" <= char <= "9" or (char == "." and "0" <= text[pos + 1:pos + 2] <= "9"
+                                      and text[pos + 1:pos + 2] != "" and text[pos - 1:pos] != "."):
                 match = NUMBER_RE.match(text, pos)
                 assert match is not None  # a digit (or '.' and a digit) was just seen
                 end = match.end()

@@ -20,11 +20,14 @@ from coverage_engine.parse.tables import NAME_RE, Tables
 QUOTED_NAME_RE = re.compile(r"\|[^|\r\n]+\|")
 #: Numbers are ASCII digits (``str.isdigit`` also accepts '²' and '①', which no number is made of).
 NUMBER_RE = re.compile(r"0[xX][0-9a-fA-F]+|\d*\.\d+(?:[eE][+-]?\d+)?|\d+", re.ASCII)
+#: String literals, each alternative written as an "unrolled loop" (a run of ordinary characters, then
+#: one escape or lone quote and another run): the regex engine keeps no state per character, so a
+#: 50 MB literal costs its own size, not the ~115 bytes per character of ``(?:a|b)*``.
 STRING_RE = re.compile(
-    r'"""(?:[^"\\]|\\[\s\S]|"(?!""))*"""'
-    r"|'''(?:[^'\\]|\\[\s\S]|'(?!''))*'''"
-    r'|"(?:[^"\\\r\n]|\\(?:\r\n|[\s\S]))*"'
-    r"|'(?:[^'\\\r\n]|\\(?:\r\n|[\s\S]))*'"
+    r'"""[^"\\]*(?:(?:\\[\s\S]|"(?!""))[^"\\]*)*"""'
+    r"|'''[^'\\]*(?:(?:\\[\s\S]|'(?!''))[^'\\]*)*'''"
+    r'|"[^"\\\r\n]*(?:\\(?:\r\n|[\s\S])[^"\\\r\n]*)*"'
+    r"|'[^'\\\r\n]*(?:\\(?:\r\n|[\s\S])[^'\\\r\n]*)*'"
 )
 NEWLINE_RE = re.compile(r"(?:(?:\r\n|\r|\n)[\t \f]*|#[^\r\n]*)+")
 BLANK_RE = re.compile(r"[\t \f]+")

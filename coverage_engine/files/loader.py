@@ -39,9 +39,25 @@ def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None 
             recorded = {k: v for k, v in document.parameters.items() if k != "_output_dir"}
             overrides = merge_overrides(recorded, overrides)
     else:
-        unit = parse_file(path)
+        unit = _parsed(path, parse_file)
         base_dir = path.parent
     return resolve(unit, base_dir=base_dir, overrides=overrides)
+
+
+#: The last ``.osc`` parsed, by path and identity (size, modification time): the same file is loaded once
+#: per parameter document, and its syntax tree does not depend on the document.
+_last_parsed: tuple[tuple, object] | None = None
+
+
+def _parsed(path: Path, parse_file):
+    global _last_parsed
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns, stat.st_ino)
+    if _last_parsed is not None and _last_parsed[0] == key:
+        return _last_parsed[1]
+    unit = parse_file(path)
+    _last_parsed = (key, unit)
+    return unit
 
 
 def merge_overrides(base: Mapping[str, object], top: Mapping[str, object] | None) -> dict[str, object]:

@@ -67,6 +67,10 @@ def _check_options(request: ExecutionRequest) -> None:
             raise UsageProblem(f"--post-run '{hook}': '{program}' is not an executable file or command")
 
 
+#: From this many parameter documents on, resolving them shows its progress on a terminal.
+PROGRESS_FROM = 2000
+
+
 def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None):
     """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``.
 
@@ -88,7 +92,11 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
                 which = f"document {index + 1} is empty" if len(documents) > 1 else "it holds no parameters"
                 logger.warning(f"{path}: {which}: scenarios run with their defaults")
     loaded = []
+    progress = len(documents) >= PROGRESS_FROM and sys.stderr.isatty()
     for index, document in enumerate(documents):
+        if progress and index % 1000 == 0:
+            print(f"\rresolving parameter document {index + 1} of {len(documents)}", end="", file=sys.stderr,
+                  flush=True)
         try:
             overrides, dirs = split_output_dirs(document, output_root)
             loaded.append((load_scenario_file(request.scenario, overrides), dirs))
@@ -98,6 +106,8 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
 
                 exc.location, exc.source_line = locate(path, index, exc.message)
             raise
+    if progress:
+        print(f"\rresolved {len(documents)} parameter documents" + " " * 12, file=sys.stderr, flush=True)
     return loaded
 
 

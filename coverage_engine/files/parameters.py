@@ -22,27 +22,6 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
     """
     import yaml
 
-    class UniqueKeyLoader(yaml.SafeLoader):
-        def construct_mapping(self, node, deep=False):
-            if isinstance(node, yaml.MappingNode):
-                seen: dict = {}
-                for key_node, _ in node.value:
-                    if key_node.tag == "tag:yaml.org,2002:merge":
-                        continue
-                    key = self.construct_object(key_node, deep=True)
-                    try:
-                        first = seen.setdefault(key, key_node)
-                    except TypeError:  # an unhashable key: PyYAML reports it
-                        continue
-                    if first is not key_node:
-                        mark = key_node.start_mark
-                        lines = text.splitlines()
-                        raise ParameterFileError(
-                            f"duplicate key '{key}' (first at line {first.start_mark.line + 1})",
-                            Location(str(path), mark.line + 1, mark.column + 1),
-                            source_line=lines[mark.line] if mark.line < len(lines) else None)
-            return super().construct_mapping(node, deep=deep)
-
     path = Path(path)
     whole_file = Location(str(path), 0, 0)
     try:
@@ -51,11 +30,11 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
         raise ParameterFileError("scenario parameter file not found", whole_file) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
-    from coverage_engine.yaml_bounds import YamlLimitError, load_all_bounded
+    from coverage_engine.yaml_bounds import YamlLimitError, load_all_bounded, with_unique_keys
 
     try:
-        documents = list(load_all_bounded(text, UniqueKeyLoader))
-    except YamlLimitError as exc:
+        documents = list(load_all_bounded(text, with_unique_keys(yaml.SafeLoader)))
+    except YamlLimitError as exc:           # too big, an alias bomb, or a key written twice (DuplicateKeyError)
         lines = text.splitlines()
         line = lines[exc.line - 1] if 0 < exc.line <= len(lines) else None
         raise ParameterFileError(str(exc), Location(str(path), exc.line, exc.column) if exc.line else whole_file,

@@ -111,3 +111,14 @@ def test_a_sce_with_a_control_character_is_a_located_error(tmp_path):
     done = subprocess.run([EXE, "-n", "v.sce"], cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 1
     assert done.stderr.startswith("v.sce:3:9: error: not a valid .sce file: character 0x7 is not allowed")
+
+
+def test_a_signed_literal_after_a_value_is_a_located_syntax_error(tmp_path):
+    """Issue 10 item 7: '7 -1' is two adjacent literals; '7 - 1' and '7 - -1' are arithmetic."""
+    bad = run(tmp_path, "import osc.helpers\nscenario t:\n    do serial:\n        log(7 -1)\n", "-n")
+    assert bad.returncode == 1
+    assert bad.stderr.startswith("s.osc:4:15: error: two values without an operator between them")
+    good = run(tmp_path, "import osc.helpers\nscenario t:\n    do serial:\n        log(7 - 1)\n        log(7 - -1)\n"
+                         "        log([1, -1])\n        log(-2)\n", name="g.osc")
+    assert good.returncode == 0, good.stderr
+    assert logged(good) == ["6", "8", "[1, -1]", "-2"]

@@ -67,6 +67,39 @@ def _breaks(text: str) -> tuple[int, int]:
     return count, last
 
 
+class AdjacentLiterals(Exception):
+    """``7 -1``: a value, a blank, then a signed literal (ASAM lexes ``-1`` as one literal): no operator."""
+
+    def __init__(self, message: str, line: int, column: int) -> None:
+        super().__init__(message)
+        self.message, self.line, self.column = message, line, column
+
+
+#: Words after which ``-1`` is an operand, not a second value (``x and -1``, ``keep(it in -1)``).
+_OPERATOR_WORDS = frozenset({"and", "or", "not", "in", "is", "return", "if", "else", "then"})
+
+
+def _signed_literal_after_value(text: str, pos: int) -> bool:
+    """Whether the ``-`` at ``pos`` starts a signed literal right after a value with a blank between them."""
+    after = text[pos + 1:pos + 2]
+    if not ("0" <= after <= "9" and after != ""):
+        return False
+    before = pos
+    while before > 0 and text[before - 1] in " \t":
+        before -= 1
+    if before == pos or before == 0:
+        return False
+    previous = text[before - 1]
+    if previous in ")]\"'":
+        return True
+    if not (previous.isalnum() or previous == "_"):
+        return False
+    start = before
+    while start > 0 and (text[start - 1].isalnum() or text[start - 1] == "_"):
+        start -= 1
+    return text[start:before] not in _OPERATOR_WORDS
+
+
 class OscLexer:
     """Tokens of one text; a word is a keyword only where the current parser state accepts it."""
 
@@ -166,6 +199,10 @@ class OscLexer:
             kind = punctuation.get(char)
             if kind is None:
                 self._fail(pos, line, column, state_box)
+            if char == "-" and _signed_literal_after_value(text, pos):
+                raise AdjacentLiterals(
+                    "two values without an operator between them: ASAM reads '-' followed by a digit as the "
+                    "sign of a literal; write 'a - 1' (subtraction) or 'a - -1'", line, column)
             yield _new_token(kind, char, pos, line, column, line, column + 1, pos + 1)
             pos += 1
 

@@ -18,6 +18,7 @@ from coverage_engine.errors import OscError, OscSyntaxError
 from coverage_engine.location import Location
 from coverage_engine.parse import cache
 from coverage_engine.parse.lalr import ParseFailure
+from coverage_engine.parse.lexer import AdjacentLiterals
 from coverage_engine.parse.raw import LOCK, raw_parse
 from coverage_engine.parse.syntax import CompilationUnit
 
@@ -31,6 +32,10 @@ def parse_text(text: str, file: str) -> CompilationUnit:
             return raw_parse(text, file)
         except OscError:
             raise
+        except AdjacentLiterals as exc:
+            lines = text.splitlines()
+            raise OscSyntaxError(exc.message, Location(file, exc.line, exc.column),
+                                 source_line=lines[exc.line - 1] if 0 < exc.line <= len(lines) else None) from None
         except ParseFailure as exc:
             from coverage_engine.parse.syntax_errors import syntax_error
 

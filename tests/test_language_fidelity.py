@@ -122,3 +122,13 @@ def test_a_signed_literal_after_a_value_is_a_located_syntax_error(tmp_path):
                          "        log([1, -1])\n        log(-2)\n", name="g.osc")
     assert good.returncode == 0, good.stderr
     assert logged(good) == ["6", "8", "[1, -1]", "-2"]
+
+
+def test_comments_and_white_space_anywhere(tmp_path):
+    """Issue 10 item 3."""
+    text = ("import osc.helpers   # lib   \n\nscenario s:   \n    do serial:    \n# col0 comment\n"
+            "            # deeper comment\n        log(/* a\n           spanning comment */ 1)\n  \n"
+            "        # between siblings\n        log(\"x # not a comment\")  # trailing  \n")
+    done = run(tmp_path, text)
+    assert done.returncode == 0, done.stderr
+    assert logged(done) == ["1", "x # not a comment"]

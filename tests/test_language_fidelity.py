@@ -132,3 +132,19 @@ def test_comments_and_white_space_anywhere(tmp_path):
     done = run(tmp_path, text)
     assert done.returncode == 0, done.stderr
     assert logged(done) == ["1", "x # not a comment"]
+
+
+def test_keeps_reach_nested_members_of_an_action_struct_parameter(tmp_path):
+    """Issue 20 item 3: with: keep(it.pose.position.z == 0.5m), merged into the given or default value."""
+    text = ("import osc.helpers\nimport osc.pybullet\nscenario s:\n    husky: actor_pybullet\n    do serial:\n"
+            "        husky.spawn(\"husky/husky.urdf\") with:\n            keep(it.pose.position.z == 0.5m)\n"
+            "            keep(it.pose.orientation.yaw == 1.0rad)\n"
+            "        husky.spawn(\"husky/husky.urdf\", pose_3d(position: position_3d(x: 2m))) with:\n"
+            "            keep(it.pose.position.z == 0.5m)\n")
+    done = run(tmp_path, text, "-n", "-l")
+    assert done.returncode == 0, done.stderr
+    model = done.stdout
+    assert "'position': {'x': 0.0, 'y': 0.0, 'z': 0.5}, 'orientation': {'roll': 0.0, 'pitch': 0.0, 'yaw': 1.0}" in model
+    assert "'position': {'x': 2.0, 'y': 0.0, 'z': 0.5}" in model
+    wrong = run(tmp_path, text.replace("it.pose.position.z", "it.pose.position.q"), "-n", name="w.osc")
+    assert wrong.returncode == 1 and "q" in wrong.stderr and wrong.stderr.startswith("w.osc:7:")

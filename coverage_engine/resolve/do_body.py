@@ -18,12 +18,13 @@ from coverage_engine.errors import (
     UnsupportedFeatureError,
 )
 from coverage_engine.parse import syntax
+from coverage_engine.records import replace
 from coverage_engine.resolve import model
 from coverage_engine.resolve.keeps import extract_keep
 from coverage_engine.resolve.operations import bind_arguments, coerce
-from coverage_engine.resolve.scope import Scope
+from coverage_engine.resolve.scope import KeepValue, Scope
 from coverage_engine.resolve.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
-from coverage_engine.resolve.values import resolve_expression
+from coverage_engine.resolve.values import apply_nested_keeps, instantiate, resolve_expression
 
 
 def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:
@@ -161,6 +162,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     what = f"action '{action.name}'"
     bound = bind_arguments(list(action.fields), node.arguments, what, node.location)
     keeps = {}
+    nested: dict[str, list[KeepValue]] = {}
     modifiers: list[syntax.ModifierInvocation] = []
     untils = []
     for member in node.with_members:
@@ -173,6 +175,11 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
             untils.append(member)
             continue
         keep = extract_keep(member, scope)
+        if len(keep.path) > 1 and keep.path[0] in action.fields \
+                and isinstance(action.fields[keep.path[0]].type, CompoundType):
+            # keep(it.pose.position.x == 1m): a member of a struct parameter, merged into its value below
+            nested.setdefault(keep.path[0], []).append(replace(keep, path=keep.path[1:]))
+            continue
         if len(keep.path) != 1 or keep.path[0] not in action.fields:
             if not keep.path:
                 raise ResolveError(f"{what}: 'keep(it == …)' needs a parameter ('keep(it.name == …)')",
@@ -194,8 +201,12 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         elif fdecl.default is not None:
             value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
                            fdecl.location, f"{what}, parameter '{name}'")
+        elif name in nested and isinstance(fdecl.type, CompoundType):
+            value = instantiate(scope.ctx, fdecl.type, {}, [], scope.ctx.fresh_path(name), node.location)
         else:
             raise ArgumentError(f"{what}: missing argument '{name}'", node.location)
+        if name in nested:        # partial overrides merged into the value given, kept or defaulted
+            value = apply_nested_keeps(scope.ctx, value, nested[name], name, node.location)
         arguments.append((name, value.expr))
     plugin_names = tuple(t.name for t in action.ancestry())
     call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,

@@ -2,12 +2,11 @@
 
 The drive of examples/pybullet/drive_variation_list.osc over 10 wheel speeds x 5 motor forces
 (50 variants; with --strategy lhs, drive_variation.osc --samples 50 is the same size), each run
-step-based on PyBullet. Prints the wall time of variation and of the batch (-j 2), and as the
-baseline the same 50 runs one after the other in a plain loop (no queue, no store, no report).
+step-based on PyBullet. Prints the wall time of variation and of the batch (-j 2) with the built-in
+runner (``--simulation``, jobs forked from a warm fork server), and as the baseline the same 50 runs
+one after the other in a plain loop (no queue, no store, no report).
 
     python benchmarks/bench_pybullet_batch.py [-j 2]
-
-Once the built-in runner lands, set BATCH_RUNNER to its form (no launch command) to measure it.
 """
 
 from __future__ import annotations
@@ -24,8 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
 SIMULATION = "executor.simulations.pybullet:PyBulletSimulation"
-BATCH_RUNNER: list[str] = ["--", str(BIN / "scenario_execution"), "{SCENARIO}", "-o", "{OUTPUT_DIR}",
-                           "--simulation", SIMULATION]
+BATCH_RUNNER: list[str] = ["--simulation", SIMULATION]
 
 
 def fifty_variants(folder: Path) -> Path:

@@ -133,6 +133,9 @@ def _check_post_run(hooks) -> None:
               help="Seconds a job is held without a heartbeat before another worker may take it.")
 @click.option("--wait", is_flag=True,
               help="When another batch writes into the output folder, wait for it instead of stopping.")
+@click.option("--simulation", metavar="MODULE:CLASS",
+              help="Built-in runner: run every job step-based on this simulation (as scenario_execution "
+                   "--simulation); with a launch command, put it in the command instead.")
 @click.option("--rerun-failed", is_flag=True,
               help="Run again, as a new batch, the jobs that did not pass in the latest batch of -o (like pytest "
                    "--lf); the report keeps the earlier passes.")
@@ -140,7 +143,8 @@ def _check_post_run(hooks) -> None:
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, rerun_failed, store_url, debug, command):
+                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, store_url, debug,
+                command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -154,6 +158,9 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
 
     input_dir = input_dirs[0] if input_dirs else None
 
+    if simulation and command:
+        raise click.UsageError("--simulation is for the built-in runner; with a launch command, pass it in the "
+                               "command (-- scenario_execution {SCENARIO} -o {OUTPUT_DIR} --simulation ...)")
     if rerun_failed and (resume or enqueue_only or input_dir is not None or command):
         raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the latest batch's "
                                "failures with that batch's input, command and options")
@@ -165,7 +172,8 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
     request = orchestration.BatchRequest(
         input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
-                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace),
+                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
+                             simulation=simulation),
         shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
     store = _open_store(store_url)
     lock = None

@@ -37,6 +37,8 @@ class BatchOptions:
     halt_on_failure: bool = False
     grace: float = 5.0
     shard: str | None = None
+    #: Built-in runner only: every job runs step-based on this simulation (``scenario_execution --simulation``).
+    simulation: str | None = None
 
     def to_json(self) -> str:
         data = asdict(self)

@@ -24,7 +24,7 @@ pytestmark = pytest.mark.slow
 
 
 def variate_and_batch(source: Path, tmp_path: Path, simulation: str, keep: list[int] | None = None,
-                      env: dict | None = None) -> dict[str, tuple[str, dict[str, str]]]:
+                      env: dict | None = None, builtin: bool = False) -> dict[str, tuple[str, dict[str, str]]]:
     """Expand ``source``, run the variants (only ``keep`` when given) with -j 2; name -> (status, variation)."""
     store = f"sqlite:///{tmp_path / 'store.db'}"
     made = run("scenario_variation", str(source), "-o", "in", "--store", store, cwd=tmp_path, env=env)
@@ -33,8 +33,9 @@ def variate_and_batch(source: Path, tmp_path: Path, simulation: str, keep: list[
         for variant in (tmp_path / "in").glob("*.sce"):
             if int(variant.stem.removeprefix(source.stem)) not in keep:
                 variant.unlink()
-    ran = run("scenario_batch_execution", "-i", "in", "-o", "results", "-j", "2", "--store", store, "--",
-              "scenario_execution", "{SCENARIO}", "-o", "{OUTPUT_DIR}", "--simulation", simulation,
+    runner = ["--simulation", simulation] if builtin else [
+        "--", "scenario_execution", "{SCENARIO}", "-o", "{OUTPUT_DIR}", "--simulation", simulation]
+    ran = run("scenario_batch_execution", "-i", "in", "-o", "results", "-j", "2", "--store", store, *runner,
               cwd=tmp_path, env=env, timeout=600)
     outcome = {}
     for suite in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testsuite"):
@@ -45,9 +46,11 @@ def variate_and_batch(source: Path, tmp_path: Path, simulation: str, keep: list[
     return outcome
 
 
-def test_pybullet_drive_variation(tmp_path):
+@pytest.mark.parametrize("builtin", [False, True], ids=["launched", "builtin"])
+def test_pybullet_drive_variation(tmp_path, builtin):
+    """The same verdicts whether each job is launched or forked by the built-in runner (--simulation)."""
     outcome = variate_and_batch(EXAMPLES / "pybullet" / "drive_variation_list.osc", tmp_path, PYBULLET_SIM,
-                                keep=[0, 5, 10, 15])
+                                keep=[0, 5, 10, 15], builtin=builtin)
     assert {name: status for name, (status, _) in outcome.items()} == {
         "drive_variation_list0": "failed",    # 2 rad/s, 0.1 N m: too slow for 2 m in 5 s
         "drive_variation_list5": "failed",    # 5 rad/s, 0.3 N m

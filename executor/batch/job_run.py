@@ -133,7 +133,8 @@ class JobRun:
         coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
         if not self.batch.command and self.launcher is None:
             raise OSError("the built-in runner is not available")
-        argv = substitute(self.batch.command or BUILTIN_COMMAND, self.scenario_path, str(self.output_dir))
+        builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
+        argv = substitute(self.batch.command or builtin, self.scenario_path, str(self.output_dir))
         child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
                              grace=options.grace, echo=self.echo, environment=self.environment,
                              marker=job_marker(self.job.id, self.job.attempts),

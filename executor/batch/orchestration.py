@@ -126,7 +126,7 @@ def write_rerun_report(store: QueueStore, earlier: Batch, batch: Batch, path: st
 #: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
 OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
                 "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
-                "grace": "--grace", "shard": "--shard"}
+                "grace": "--grace", "shard": "--shard", "simulation": "--simulation"}
 
 
 def _shown(value: object) -> str:

@@ -310,8 +310,9 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
 @click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
 @click.option("-o", "--output", default="test.xml", show_default=True, type=click.Path(dir_okay=False),
               help="File for the merged JUnit report.")
+@click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option
-def report_command(store_url, batch_id, output, debug):
+def report_command(store_url, batch_id, output, as_json, debug):
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
     from executor.batch import orchestration
 
@@ -319,9 +320,24 @@ def report_command(store_url, batch_id, output, debug):
     try:
         batch = _pick_batch(store, batch_id)
         counts = orchestration.write_batch_report(store, batch, output)
+        failed = None
+        if as_json:
+            from executor.batch.failure_summary import not_passed
+            from store.variant_lookup import variant_infos
+
+            jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]
+            failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
     finally:
         store.close()
-    click.echo(orchestration.summary_line(batch, counts, output))
+    if failed is not None:
+        import json
+
+        click.echo(json.dumps({"batch": batch.id, "report": os.path.abspath(output),
+                               "counts": {state.value: count for state, count in counts.items()},
+                               "exit_code": orchestration.exit_code(counts),
+                               "not_passed": [item.as_dict() for item in failed]}, indent=2))
+    else:
+        click.echo(orchestration.summary_line(batch, counts, output))
     return orchestration.exit_code(counts)
 
 

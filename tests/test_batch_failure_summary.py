@@ -70,3 +70,19 @@ def test_variant_values_reach_the_report_whatever_store_ran_the_batch(tmp_path):
     suites = {s.get("name"): s for s in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testsuite")}
     properties = {p.get("name"): p.get("value") for p in suites["gap1"].iter("property")}
     assert properties["variation.gap_check.gap"] == "2.0"
+
+
+def test_report_json_gives_counts_and_failures(tmp_path):
+    (tmp_path / "gap.osc").write_text(SCENARIO)
+    env = dict(os.environ, NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    subprocess.run([str(BIN / "scenario_variation"), "gap.osc"], cwd=tmp_path, env=env, check=True, capture_output=True)
+    subprocess.run([str(BIN / "scenario_batch_execution"), "-i", "out", "-o", "results"], cwd=tmp_path, env=env,
+                   capture_output=True, timeout=120)
+    done = subprocess.run([str(BIN / "scenario_batch_execution"), "report", "--json", "-o", "again.xml"], cwd=tmp_path,
+                          env=env, capture_output=True, text=True)
+    assert done.returncode == 1
+    document = json.loads(done.stdout)
+    assert document["counts"]["passed"] == 1 and document["counts"]["failed"] == 1 and document["exit_code"] == 1
+    assert [i["name"] for i in document["not_passed"]] == ["gap0[gap=0.5]"]
+    assert (tmp_path / "again.xml").is_file()

@@ -90,7 +90,7 @@ def ours(work: Path, count: int, env: dict[str, str], slots: int = 2) -> dict[st
     variation = timed([str(BIN / "scenario_variation"), "bench.osc", "-o", "out", "--store", store], work, env)
     batch = timed([str(BIN / "scenario_batch_execution"), "-i", "out", "-o", "res", "-j", str(slots),
                    "--store", store], work, env)
-    made = len(list((work / "res").iterdir())) - 1
+    made = sum(1 for p in (work / "res").iterdir() if p.is_dir())
     assert made == count, f"{made} job folders for {count} variants"
     return {"variation": variation[0], "batch": batch[0], "cpu": variation[1] + batch[1]}
 

@@ -117,7 +117,8 @@ def _check_post_run(hooks) -> None:
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
               help="Jobs run in parallel ('auto': one per CPU).")
 @click.option("--timeout", type=Seconds(), metavar="S",
-              help="Seconds a job may run; then its process group gets SIGTERM, then SIGKILL.")
+              help="Seconds a job may run, counted from its process's start (start-up included); then its "
+                   "process group gets SIGTERM, then SIGKILL after --grace.")
 @click.option("--grace", type=Seconds(), default=5.0, show_default=True, metavar="S",
               help="Seconds between SIGTERM/SIGINT and SIGKILL.")
 @click.option("--retries", type=click.IntRange(min=0), default=0, show_default=True, metavar="K",

@@ -37,6 +37,14 @@ def _wait_for_ledger(tmp_path: Path, count: int, proc, timeout: float = 60) -> N
         time.sleep(0.02)
 
 
+def _wait_for_a_running_job(tmp_path: Path, proc, timeout: float = 30) -> None:
+    deadline = time.monotonic() + timeout
+    while not any(j.status is JobState.RUNNING and j.started_at and time.time() - j.started_at < 0.5
+                  for j in _store_jobs(tmp_path)):
+        assert proc.poll() is None and time.monotonic() < deadline, "no job was running"
+        time.sleep(0.02)
+
+
 def _store_jobs(tmp_path: Path):
     store = QueueStore.open(f"sqlite:///{tmp_path / '.scenario_store.db'}")
     try:
@@ -78,11 +86,12 @@ def test_kill_9_mid_batch_then_resume_runs_each_job_once(tmp_path):
 def test_ctrl_c_cancels_writes_partial_report_and_resume_completes(tmp_path):
     names = [f"s{i:02d}" for i in range(12)]
     child = write_child(tmp_path)
-    write_scenarios(tmp_path / "in", {n: "sleep=0.4" for n in names})
+    write_scenarios(tmp_path / "in", {n: "sleep=0.8" for n in names})
     env = cli_env(tmp_path)
     proc = start_cli(["-i", "in", "-o", "results", "-j", "2", "--grace", "2", "--",
                       *child_command(child)], tmp_path, env)
     _wait_for_ledger(tmp_path, 3, proc)
+    _wait_for_a_running_job(tmp_path, proc)     # not in the gap between one job's end and the next one's start
     proc.send_signal(signal.SIGINT)
     out, _ = proc.communicate(timeout=30)
     assert proc.returncode == 130, out

@@ -88,3 +88,18 @@ def test_a_planted_symbolic_link_is_never_written_through(tmp_path):
     assert "cut2.sce" in result.stderr
     assert victim.read_text() == "secret\n"
     assert (out / "cut2.sce").is_symlink()
+
+
+def test_a_stem_too_long_for_the_variant_names_writes_and_records_nothing(tmp_path):
+    """Issue 21 item 3: 'File name too long' at variant 10 used to leave rows for files never written."""
+    stem = "a" * 250
+    (tmp_path / f"{stem}.osc").write_text(SCENARIO.replace("['A1', 'A2', 'A3']", str([f"A{i}" for i in range(12)])))
+    result = vary(tmp_path, f"{stem}.osc")
+    assert result.returncode == 1
+    assert "longer than the 255 bytes a file name may have" in result.stderr and "nothing was written" in result.stderr
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.sce"))
+    from store.database import open_engine
+    from store.variants import count_rows
+
+    if (tmp_path / ".scenario_store.db").exists():
+        assert count_rows(open_engine(f"sqlite:///{tmp_path / '.scenario_store.db'}")).get("variants", 0) == 0

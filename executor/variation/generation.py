@@ -59,6 +59,10 @@ class OutputFolderBusy(OscError):
     """another scenario_variation (or batch) writes into the output folder"""
 
 
+class OutputNameTooLong(OscError):
+    """the variants' file names would exceed what the file system allows"""
+
+
 class ForeignFilesInOutput(OscError):
     """files in the output folder that this generation would replace but did not write"""
 
@@ -189,6 +193,13 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     output_dir = Path(request.output_dir)
     # Files of the new generation overwrite those of the same name in place (far cheaper than
     # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
+    longest = f"{plan.path.stem}{max(plan.total - 1, 0)}.sce"
+    limit = _name_max(output_dir)
+    if len(os.fsencode(longest)) > limit:
+        raise OutputNameTooLong(
+            f"the variant files would be named up to '{longest[:40]}…{longest[-12:]}' ({len(os.fsencode(longest))} "
+            f"bytes), longer than the {limit} bytes a file name may have in {output_dir}/; nothing was written",
+            Location(str(plan.path), 0, 0), hint="give the .osc file a shorter name")
     # Only what an earlier generation of the same source wrote is replaced; a file of the same name that
     # it did not write (hand-written, another tool's, a symbolic link) stops the run before anything is written.
     foreign = foreign_files(output_dir, plan.path, plan.total)
@@ -274,6 +285,17 @@ def _other_sce_files(folder: Path, ours: set[str]) -> int:
         return sum(1 for name in os.listdir(folder) if name.endswith(".sce") and name not in ours)
     except OSError:
         return 0
+
+
+def _name_max(folder: Path) -> int:
+    """Longest file name (bytes) the file system of ``folder`` (or its nearest existing parent) accepts."""
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    try:
+        return int(os.pathconf(probe, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
 
 
 def _printable(name: str) -> str:

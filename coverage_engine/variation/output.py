@@ -50,36 +50,36 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents)
 
 
-def earlier_generation(output_dir: str | os.PathLike, source: str | os.PathLike) -> list[Path]:
-    """The ``.sce`` files in ``output_dir`` that an earlier generation of ``source`` wrote.
+@dataclass(frozen=True, slots=True)
+class OutputSurvey:
+    """What ``output_dir`` already holds under the names of ``source``'s variants.
 
-    Only files named ``<source stem><index>.sce`` that carry our marker and name the same source file
-    (name and folder) count: variants of another ``.osc`` in the same folder, hand-written files and
-    other tools' files are never part of it, so they are never replaced or removed.
+    ``earlier``: the ``.sce`` files an earlier generation of the same source wrote (our marker, the same
+    source file by name and folder) — to be replaced or removed. ``foreign``: entries under the name of
+    one of the ``count`` new variants that no generation of it wrote (hand-written, another tool's, a
+    symbolic link) — writing would replace them, or write through them, so the caller refuses to start.
+    Variants of another ``.osc`` in the same folder are in neither list and are never touched.
     """
+
+    earlier: list[Path]
+    foreign: list[Path]
+
+
+def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, count: int) -> OutputSurvey:
+    """Sort the entries of ``output_dir`` named like variants of ``source`` (each file's head read once)."""
     folder = Path(output_dir)
     if not folder.is_dir():
-        return []
-    source = Path(source)
-    return sorted(p for p in _named_like_variants(folder, source.stem)
-                  if not p.is_symlink() and p.is_file() and written_from(p, source))
-
-
-def foreign_files(output_dir: str | os.PathLike, source: str | os.PathLike, count: int) -> list[Path]:
-    """Entries of ``output_dir`` under the name of one of ``count`` variants of ``source`` that no
-    generation of it wrote.
-
-    Writing the new generation would replace them (or write through them, for a symbolic link), so
-    the caller refuses to start while there are any.
-    """
-    folder = Path(output_dir)
-    if not folder.is_dir():
-        return []
+        return OutputSurvey([], [])
     source = Path(source)
     start, end = len(source.stem), -len(SUFFIX)
-    return sorted(p for p in _named_like_variants(folder, source.stem)
-                  if int(p.name[start:end]) < count and str(int(p.name[start:end])) == p.name[start:end]
-                  and (p.is_symlink() or not p.is_file() or not written_from(p, source)))
+    earlier, foreign = [], []
+    for path in sorted(_named_like_variants(folder, source.stem)):
+        ours = not path.is_symlink() and path.is_file() and written_from(path, source)
+        if ours:
+            earlier.append(path)
+        elif int(path.name[start:end]) < count and str(int(path.name[start:end])) == path.name[start:end]:
+            foreign.append(path)
+    return OutputSurvey(earlier, foreign)
 
 
 def _named_like_variants(folder: Path, stem: str) -> list[Path]:

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
+from executor.terminal import printable
 from executor.variation import report
 from executor.variation.report import echo
 
@@ -100,8 +101,8 @@ def run(request: VariationRequest) -> int:
     try:
         request.scenario.encode("utf-8")
     except UnicodeEncodeError:
-        shown = request.scenario.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-        raise OscError(f"{shown}: the file name is not UTF-8; rename the file (nothing was written for it)") from None
+        raise OscError(f"{printable(request.scenario)}: the file name is not UTF-8; rename the file (nothing was "
+                       "written for it)") from None
     with _terminate_like_interrupt():
         documents = None
         if request.parameter_file is not None:
@@ -180,13 +181,7 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: ob
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None) -> int:
-    from coverage_engine.variation.output import (
-        earlier_generation,
-        foreign_files,
-        generate,
-        remove_files,
-        source_sha256,
-    )
+    from coverage_engine.variation.output import generate, remove_files, source_sha256, survey_output
     from store.database import StoreError
     from store.variants import VariantRecord, VariationRecorder
 
@@ -202,16 +197,17 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             Location(str(plan.path), 0, 0), hint="give the .osc file a shorter name")
     # Only what an earlier generation of the same source wrote is replaced; a file of the same name that
     # it did not write (hand-written, another tool's, a symbolic link) stops the run before anything is written.
-    foreign = foreign_files(output_dir, plan.path, plan.total)
+    survey = survey_output(output_dir, plan.path, plan.total)
+    foreign = survey.foreign
     if foreign:
-        shown = ", ".join(_printable(p.name) for p in foreign[:3]) + (f" and {len(foreign) - 3} more"
+        shown = ", ".join(printable(p.name) for p in foreign[:3]) + (f" and {len(foreign) - 3} more"
                                                                       if len(foreign) > 3 else "")
         raise ForeignFilesInOutput(
             f"{output_dir}/ holds {len(foreign)} file(s) named like variants of {plan.path.name} that "
             f"scenario_variation did not generate from it ({shown}); nothing was written",
             Location(str(plan.path), 0, 0),
             hint="move those files away, or write the variants to another folder with -o")
-    old = {p.name: p for p in earlier_generation(output_dir, plan.path)}
+    old = {p.name: p for p in survey.earlier}
     if old:
         echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
     others = _other_sce_files(output_dir, set(old))
@@ -296,12 +292,6 @@ def _name_max(folder: Path) -> int:
         return int(os.pathconf(probe, "PC_NAME_MAX"))
     except (OSError, ValueError, AttributeError):
         return 255
-
-
-def _printable(name: str) -> str:
-    """A file name fit for the terminal: control characters and undecodable bytes escaped."""
-    return name.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace").encode(
-        "unicode_escape").decode("ascii") if not name.isprintable() else name
 
 
 class _ModelLog:

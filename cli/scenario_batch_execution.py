@@ -274,18 +274,14 @@ def _pick_batch(store, batch_id):
 @debug_option
 def status_command(store_url, batch_id, list_state, as_json, debug):
     """Show jobs per state, running jobs per worker and host, and an ETA."""
-    from executor.batch.failure_summary import not_passed
+    from executor.batch.failure_summary import not_passed_in_store
     from executor.batch.status import render, snapshot
-    from store.variant_lookup import variant_infos
 
     store = _open_store(store_url, existing=True)
     try:
         batch = _pick_batch(store, batch_id)
         snap = snapshot(store, batch)
-        failed = None
-        if list_state is not None:
-            jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]
-            failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
+        failed = not_passed_in_store(store, batch.id) if list_state is not None else None
         if as_json:
             import json
 
@@ -323,11 +319,9 @@ def report_command(store_url, batch_id, output, as_json, debug):
         counts = orchestration.write_batch_report(store, batch, output)
         failed = None
         if as_json:
-            from executor.batch.failure_summary import not_passed
-            from store.variant_lookup import variant_infos
+            from executor.batch.failure_summary import not_passed_in_store
 
-            jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]
-            failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
+            failed = not_passed_in_store(store, batch.id)
     finally:
         store.close()
     if failed is not None:
@@ -359,12 +353,9 @@ def _lock_output(folder: str, wait: bool):
 
 def _print_failures(store, batch) -> None:
     """The short summary of the jobs that did not pass (nothing when all passed)."""
-    from executor.batch.failure_summary import not_passed, summary_lines
-    from store.variant_lookup import variant_infos
+    from executor.batch.failure_summary import not_passed_in_store, summary_lines
 
-    jobs = [job for job in store.iter_results(batch.id) if job.status.value != "passed"]   # with their test.xml
-    failed = not_passed(jobs, variant_infos(store.engine, [j.scenario_path for j in jobs]))
-    for text in summary_lines(failed):
+    for text in summary_lines(not_passed_in_store(store, batch.id)):
         click.echo(text)
 
 

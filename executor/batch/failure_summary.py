@@ -17,7 +17,9 @@ from dataclasses import dataclass
 from executor.batch.junit_merge import child_cases, job_cases, job_names
 from executor.terminal import printable
 from store.jobs import Job
+from store.queue import QueueStore
 from store.states import FINAL, JobState
+from store.variant_lookup import variant_infos
 
 #: Longest reason shown on a summary line (the whole text is in test.xml and the log).
 REASON_CHARS = 240
@@ -60,6 +62,12 @@ def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[Not
         log = os.path.join(job.output_dir, "log.txt") if job.output_dir else None
         found.append(NotPassed(job.status.value, names.name, reason, log, job.scenario_path))
     return found
+
+
+def not_passed_in_store(store: QueueStore, batch_id: int) -> list[NotPassed]:
+    """The jobs of a stored batch that did not pass, read with their test.xml (for their reasons)."""
+    jobs = [job for job in store.iter_results(batch_id) if job.status is not JobState.PASSED]
+    return not_passed(jobs, variant_infos(store.engine, [job.scenario_path for job in jobs]))
 
 
 def summary_lines(items: list[NotPassed]) -> list[str]:

@@ -51,8 +51,8 @@ def prepare_job_folder(root: Path, folder: Path) -> None:
     if folder.is_symlink():
         raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
     folder.mkdir(parents=True, exist_ok=True)
-    real_root, real = os.path.realpath(root), os.path.realpath(folder)
-    if real != real_root and not real.startswith(real_root.rstrip(os.sep) + os.sep):
+    real = folder.resolve()
+    if not real.is_relative_to(root.resolve()):
         raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
 
 

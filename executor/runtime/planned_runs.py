@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.resolve.model import Scenario, ScenarioFile
@@ -85,8 +86,8 @@ def _check_folder(key: str, target: str, output_root: str | None) -> None:
     root = os.path.abspath(output_root) if output_root is not None else ""
     folder = os.path.normpath(target if os.path.isabs(target) else os.path.join(root, target))
     if not os.path.isabs(target):
-        real_root, real = os.path.realpath(root), os.path.realpath(folder)
-        if real != real_root and not real.startswith(real_root.rstrip(os.sep) + os.sep):
+        real = Path(folder).resolve()
+        if not real.is_relative_to(Path(root).resolve()):
             raise ParameterFileError(
                 f"'{key}': '{target}' leads out of the output directory through a symbolic link "
                 f"(to {real}); use a path inside it, or an absolute path")

@@ -16,7 +16,6 @@ from __future__ import annotations
 import json
 import os
 import socket
-import sys
 import time
 from pathlib import Path
 
@@ -94,8 +93,3 @@ def _describe(fd: int) -> str:
     when = time.strftime(" since %H:%M:%S", time.localtime(since)) if isinstance(since, (int, float)) else ""
     return f"{data.get('command', 'a command')} (pid {data['pid']} on {data.get('host', '?')}{when})"
 
-
-def command_line() -> str:
-    """This process's command, short, for the lock file."""
-    name = os.path.basename(sys.argv[0]) if sys.argv else "?"
-    return name

@@ -275,11 +275,3 @@ def _bad_values(plan: VariationPlan) -> list[set[int]]:
             bad[slot.dims[0]] = set(options)
     return bad
 
-
-def measure_tuples(rows: Sequence[Sequence[int]], sizes: Sequence[int], t: int) -> int:
-    """How many distinct t-tuples ``rows`` hold (for the summary of any strategy)."""
-    seen = set()
-    for g in itertools.combinations(range(len(sizes)), t):
-        for row in rows:
-            seen.add((g, tuple(row[a] for a in g)))
-    return len(seen)

@@ -18,7 +18,6 @@ samples nothing (there is nowhere to keep it).
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Sequence
 
 from coverage_engine.coverage.run_file import ItemSamples, RunCoverageBuilder, write_run_coverage
@@ -131,7 +130,3 @@ def _one(value: object) -> str:
         return "true" if value else "false"
     return str(value)
 
-
-def coverage_file_dir(run_output_dir: str | None) -> str | None:
-    """Where a run's ``coverage.json`` goes (its output folder), or None."""
-    return run_output_dir if run_output_dir and os.path.isdir(run_output_dir) else None

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 
     from coverage_engine.variation.output import Generated
     from coverage_engine.variation.plan import Resolve, VariationPlan
+    from coverage_engine.variation.strategies import TupleCoverage
 
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
 DEFAULT_MAX_VARIANTS = 10_000_000
@@ -168,12 +169,10 @@ def _open_store(url: str | None) -> Engine:
     return engine
 
 
-def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: object) -> str:
+def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: TupleCoverage | None) -> str:
     """One line: the strategy, how many variants it chose and, for a covering array, the tuples covered."""
-    from coverage_engine.variation.strategies import TupleCoverage
-
     text = f"strategy {request.strategy}: {plan.total} variant(s) over {len(plan.sizes)} dimension(s)"
-    if isinstance(tuples, TupleCoverage):
+    if tuples is not None:
         text += (f"; {tuples.covered} of {tuples.coverable} coverable {tuples.strength}-tuples covered"
                  + (f" ({tuples.impossible} impossible: they hold a value that does not resolve)"
                     if tuples.impossible else ""))

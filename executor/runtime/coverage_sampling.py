@@ -17,7 +17,6 @@ samples nothing (there is nowhere to keep it).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 from coverage_engine.coverage.run_file import ItemSamples, RunCoverageBuilder, write_run_coverage
@@ -124,8 +123,6 @@ def _samples_text(values: Sequence[object]) -> str:
 def _one(value: object) -> str:
     if isinstance(value, list):
         return "(" + ", ".join(_one(v) for v in value) + ")"
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else str(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     return str(value)

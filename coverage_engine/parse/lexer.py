@@ -81,8 +81,7 @@ _OPERATOR_WORDS = frozenset({"and", "or", "not", "in", "is", "return", "if", "el
 
 def _signed_literal_after_value(text: str, pos: int) -> bool:
     """Whether the ``-`` at ``pos`` starts a signed literal right after a value with a blank between them."""
-    after = text[pos + 1:pos + 2]
-    if not ("0" <= after <= "9" and after != ""):
+    if not "0" <= text[pos + 1:pos + 2] <= "9":       # an empty slice is below "0"
         return False
     before = pos
     while before > 0 and text[before - 1] in " \t":
@@ -133,7 +132,7 @@ class OscLexer:
                 pos = end
                 continue
             if "0" <= char <= "9" or (char == "." and "0" <= text[pos + 1:pos + 2] <= "9"
-                                      and text[pos + 1:pos + 2] != "" and text[pos - 1:pos] != "."):
+                                      and text[pos - 1:pos] != "."):
                 match = NUMBER_RE.match(text, pos)
                 assert match is not None  # a digit (or '.' and a digit) was just seen
                 end = match.end()

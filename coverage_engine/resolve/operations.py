@@ -147,6 +147,30 @@ def coerce(value: TypedExpr, target: OscType, location: Location, what: str,
     return TypedExpr(value.expr, target if not isinstance(target, CompoundType) else src, value.is_literal)
 
 
+def common_element(items: list[TypedExpr], mixed_ok: bool) -> OscType:
+    """The element type of a list literal without an expected one: int promotes to float (as in any numeric
+    context); elements of different kinds make a mixed list only where any value is accepted (``log``'s
+    message prints whatever it gets), else the first element's type decides and the others are checked."""
+    kinds = [i.type for i in items]
+    if all(t in (INT, UINT, FLOAT) for t in kinds) and FLOAT in kinds:
+        return FLOAT
+    if mixed_ok and any(t is not kinds[0] for t in kinds):
+        return ANY
+    return kinds[0]
+
+
+def physical_value(number: int | float, factor: float, offset: float) -> int | float:
+    """A physical literal's value in SI base units, keeping the number kind it was written with: ``3s`` is
+    3 and ``2min`` 120 (ints), ``2.0s`` 2.0 and ``200ms`` 0.2 (floats), so it prints as the reference prints
+    it (log checks and process_log_check patterns depend on that)."""
+    value = number * factor + offset
+    if isinstance(number, int) and not isinstance(number, bool):
+        rounded = round(value)
+        if abs(value - rounded) < 1e-9 * max(1.0, abs(value)):
+            return int(rounded)
+    return float(value)
+
+
 def assignable(src: OscType, target: OscType) -> bool:
     """Whether a value of type ``src`` may be given where ``target`` is declared."""
     if src is target:

@@ -37,11 +37,13 @@ from coverage_engine.resolve.operations import (
     arithmetic_type,
     bind_arguments,
     coerce,
+    common_element,
     comparable,
     fold,
     member_of,
     members_of,
     ordered,
+    physical_value,
     struct_value,
 )
 from coverage_engine.resolve.scope import KeepValue, ResolveContext, Scope, TypedExpr
@@ -170,7 +172,7 @@ def _list(expr: syntax.ListExpr, scope: Scope, expected: OscType | None) -> Type
     if element_expected is not None:
         element = element_expected
     else:
-        element = _common_element(items, mixed_ok=expected is STRING or expected is ANY)
+        element = common_element(items, mixed_ok=expected is STRING or expected is ANY)
     # An int among floats is a float by type, but keeps its value as written (printed ``[-3, -0.5]``).
     converted = [TypedExpr(item.expr, FLOAT, item.is_literal) if element is FLOAT and item.type in (INT, UINT)
                  else coerce(item, element, item_expr.location, f"list element {n}")
@@ -180,30 +182,6 @@ def _list(expr: syntax.ListExpr, scope: Scope, expected: OscType | None) -> Type
     if all(i.is_const for i in converted):
         return TypedExpr(model.Const([i.value for i in converted]), ltype, literal)
     return TypedExpr(model.MakeList(tuple(i.expr for i in converted)), ltype, False)
-
-
-def _common_element(items: list[TypedExpr], mixed_ok: bool) -> OscType:
-    """The element type of a list literal without an expected one: int promotes to float (as in any numeric
-    context); elements of different kinds make a mixed list only where any value is accepted (``log``'s
-    message prints whatever it gets), else the first element's type decides and the others are checked."""
-    kinds = [i.type for i in items]
-    if all(t in (INT, UINT, FLOAT) for t in kinds) and FLOAT in kinds:
-        return FLOAT
-    if mixed_ok and any(t is not kinds[0] for t in kinds):
-        return ANY
-    return kinds[0]
-
-
-def physical_value(number: int | float, factor: float, offset: float) -> int | float:
-    """A physical literal's value in SI base units, keeping the number kind it was written with: ``3s`` is
-    3 and ``2min`` 120 (ints), ``2.0s`` 2.0 and ``200ms`` 0.2 (floats), so it prints as the reference prints
-    it (log checks and process_log_check patterns depend on that)."""
-    value = number * factor + offset
-    if isinstance(number, int) and not isinstance(number, bool):
-        rounded = round(value)
-        if abs(value - rounded) < 1e-9 * max(1.0, abs(value)):
-            return int(rounded)
-    return float(value)
 
 
 def _enum_value(expr: syntax.EnumValueRef, scope: Scope, expected: OscType | None) -> TypedExpr:

@@ -235,7 +235,8 @@ def _range_choices(right: s.Expression) -> tuple[list[Choice], RangeSpec | None]
         values = [int(v) for v in values]
     else:
         values = [round(v, 12) for v in values]
-    return [Choice(f"{v!r}{unit}" if unit else repr(v), f"{v!r}{unit}" if unit else v, where) for v in values], None
+    # A physical value is stored as its text (as a listed '30kph' is), a plain number as the number.
+    return [Choice(f"{v!r}{unit}", f"{v!r}{unit}" if unit else v, where) for v in values], None
 
 
 def _check_in(expr: s.BinaryOp) -> None:

@@ -79,26 +79,21 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
         return
     if options.samples is None:
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
-    axes = len(plan.sizes)
-    points = unit_points(options.strategy, options.samples, axes, options.seed)
-    dimensions: list[Dimension] = []
-    rows = [[0] * axes for _ in points]
-    for axis, dim in enumerate(plan.dimensions):
-        if dim.continuous is not None:
-            spec = dim.continuous
+    sizes = plan.sizes                     # choices per axis: the dimensions, then the documents if any
+    points = unit_points(options.strategy, options.samples, len(sizes), options.seed)
+    dimensions: list[Dimension] = list(plan.dimensions)
+    rows = [[0] * len(sizes) for _ in points]
+    for axis, size in enumerate(sizes):
+        spec = dimensions[axis].continuous if axis < len(dimensions) else None
+        if spec is not None:                # each point draws its own value: row i takes choice i
             values = [spec.low + p[axis] * (spec.high - spec.low) for p in points]
-            choices = tuple(Choice(spec.text(v), v, spec.location) for v in values)
-            dimensions.append(replace(dim, choices=choices))
+            dimensions[axis] = replace(dimensions[axis],
+                                       choices=tuple(Choice(spec.text(v), v, spec.location) for v in values))
             for i, row in enumerate(rows):
                 row[axis] = i
-        else:
-            dimensions.append(dim)
+        else:                               # a discrete axis: the coordinate picks one of its values
             for row, point in zip(rows, points, strict=True):
-                row[axis] = min(int(point[axis] * len(dim.choices)), len(dim.choices) - 1)
-    if plan.documents is not None:
-        axis = len(plan.dimensions)
-        for row, point in zip(rows, points, strict=True):
-            row[axis] = min(int(point[axis] * len(plan.documents)), len(plan.documents) - 1)
+                row[axis] = min(int(point[axis] * size), size - 1)
     plan.dimensions = dimensions
     plan.template = TextTemplate.build(plan.text, dimensions)
     plan.slots = _slots(dimensions, plan.documents)

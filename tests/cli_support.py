@@ -38,3 +38,11 @@ def example_library_env(target: Path) -> dict[str, str]:
         errors.append(install.stderr.strip())
     pytest.fail("cannot install examples/example_library (pip install ./examples/example_library):\n"
                 + "\n".join(errors))
+
+
+def run_variation(cwd: Path, *args: str, timeout: float = 60) -> subprocess.CompletedProcess:
+    """Run the real ``scenario_variation`` in ``cwd`` with plain output and the default store of ``cwd``."""
+    env = dict(os.environ, PYTHONPATH=str(EXAMPLES.parent), NO_COLOR="1")
+    env.pop("SCENARIO_STORE", None)
+    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=timeout)

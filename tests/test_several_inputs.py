@@ -9,16 +9,14 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
+from cli_support import run_variation
 
 BIN = Path(sys.executable).parent
 ONE = "import osc.helpers\nscenario {name}:\n    do serial:\n        log() with:\n            keep(it.msg in ['a', 'b'])\n"
 
 
 def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, NO_COLOR="1")
-    env.pop("SCENARIO_STORE", None)
-    return subprocess.run([str(BIN / "scenario_variation"), *args], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, timeout=120)
+    return run_variation(tmp_path, *args, timeout=120)
 
 
 def test_variation_takes_files_and_folders_into_one_output(tmp_path):

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
 from pathlib import Path
 
-from coverage_engine.files.sce import read_sce
+from cli_support import run_variation
 
-ROOT = Path(__file__).resolve().parents[1]
+from coverage_engine.files.sce import read_sce
 
 TWO_KEEPS = """import osc.helpers
 
@@ -23,10 +21,7 @@ scenario test:
 
 
 def run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NO_COLOR="1")
-    env.pop("SCENARIO_STORE", None)
-    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=60)
+    return run_variation(tmp_path, *args)
 
 
 def _store_rows(tmp_path: Path) -> dict[str, int]:

@@ -5,23 +5,17 @@ Real command in a subprocess on real files.
 
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from cli_support import run_variation
 
 from coverage_engine.files.sce import read_sce
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NO_COLOR="1")
-    env.pop("SCENARIO_STORE", None)
-    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=60)
+    return run_variation(tmp_path, *args)
 
 
 @pytest.mark.parametrize("right, message", [

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from cli_support import run_variation
 
 SCENARIO = """import osc.helpers
 
@@ -19,10 +17,7 @@ scenario test:
 
 
 def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NO_COLOR="1")
-    env.pop("SCENARIO_STORE", None)
-    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=60)
+    return run_variation(tmp_path, *args)
 
 
 def names(folder: Path) -> list[str]:

@@ -7,26 +7,20 @@ test, and every pair (or triple) is looked for in the written ``.sce`` files' as
 from __future__ import annotations
 
 import itertools
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from cli_support import run_variation
 
 from coverage_engine.files.sce import read_sce
-
-ROOT = Path(__file__).resolve().parents[1]
 
 FIVE = {"a": [0, 1, 2, 3, 4], "b": [0, 1, 2, 3, 4], "c": [0, 1, 2, 3, 4], "d": [0, 1, 2, 3],
         "e": ["x", "y", "z"]}
 
 
 def vary(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NO_COLOR="1")
-    env.pop("SCENARIO_STORE", None)
-    return subprocess.run([sys.executable, "-m", "cli.scenario_variation", *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return run_variation(tmp_path, *args, timeout=120)
 
 
 def discrete_file(tmp_path: Path) -> Path:

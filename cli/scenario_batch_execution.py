@@ -199,15 +199,24 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
             click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
                        f"'{PROG} worker --store URL' on each host")
             return 0
-        counts, signum = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        report = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
-        if earlier is not None and signum is None:
+        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        counts, signum = ran.counts, ran.signum
+        report: str | None = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        if earlier is not None and signum is None and ran.disk_full is None:
             counts = orchestration.write_rerun_report(store, earlier, batch, report)
         _print_failures(store, batch)
+        if ran.report_error is not None:
+            report = None
         line = orchestration.summary_line(batch, counts, report)
         if signum is not None:
             line += "; interrupted, finish with --resume"
         click.echo(line)
+        if ran.disk_full is not None:
+            click.echo(f"error: no space left on the device holding {ran.disk_full}: the batch stopped; "
+                       + (f"{ran.report_error}, " if ran.report_error else "")
+                       + f"every finished result is in the store ({store.url}); make room, then run the same "
+                       "command with --resume to finish it", err=True)
+            return orchestration.EXIT_FAILED if signum is None else orchestration.exit_code(counts, signum)
         if not sum(counts.values()) and signum is None:
             where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
             click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "

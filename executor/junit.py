@@ -51,11 +51,13 @@ def write_report(path: str | os.PathLike[str], xml_text: str, *, durable: bool =
             if durable:
                 os.fsync(handle.fileno())
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(exc, OSError) and exc.filename is None:   # a failed write names no file: name the report
+            raise OSError(exc.errno, exc.strerror, str(target)) from None
         raise
 
 

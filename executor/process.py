@@ -11,6 +11,7 @@ left of the group when the child exits is killed too.
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import subprocess
@@ -40,6 +41,8 @@ class ProcessOutcome:
     finished_at: float
     timed_out: bool = False
     cancelled: bool = False
+    #: Copying the child's output to its log met a full disk (the rest of the output was dropped).
+    disk_full: bool = False
 
     @property
     def signal_name(self) -> str | None:
@@ -136,6 +139,7 @@ class ChildProcess:
         self._timers: list[threading.Timer] = []
         self._timed_out = False
         self._cancelled = False
+        self._log_error: OSError | None = None
         self._started_at = 0.0
         self._kill_at: float | None = None     # monotonic time of the SIGKILL a timeout or cancel arranged
 
@@ -214,8 +218,10 @@ class ChildProcess:
             kill_group(self.proc.pid)          # grandchildren left behind die with the job
         if copier is not None:
             copier.join(timeout=5.0)
+        error = self._log_error
         return ProcessOutcome(returncode=returncode, started_at=self._started_at, finished_at=finished,
-                              timed_out=self._timed_out, cancelled=self._cancelled and not self._timed_out)
+                              timed_out=self._timed_out, cancelled=self._cancelled and not self._timed_out,
+                              disk_full=error is not None and error.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)))
 
     def cancel(self, grace: float | None = None) -> None:
         """Ask the child's group to stop (SIGINT), kill it after ``grace`` seconds (0: at once)."""
@@ -263,16 +269,36 @@ class ChildProcess:
         assert self.proc is not None and self.proc.stdout is not None and self.echo is not None
         stream = self.proc.stdout
         assert self.log_path is not None
-        with open(self.log_path, "ab") as log:
-            while True:
-                data = stream.read1(_CHUNK) if hasattr(stream, "read1") else stream.read(_CHUNK)
-                if not data:
-                    break
-                log.write(data)
-                log.flush()
+        log: BinaryIO | None = None
+        try:
+            log = open(self.log_path, "ab")
+        except OSError as exc:
+            self._log_error = exc
+        while True:
+            data = stream.read1(_CHUNK) if hasattr(stream, "read1") else stream.read(_CHUNK)
+            if not data:
+                break
+            if log is not None:
                 try:
-                    self.echo.write(data)
-                    self.echo.flush()
-                except (OSError, ValueError):
-                    pass
+                    log.write(data)
+                    log.flush()
+                except OSError as exc:   # a full disk: keep draining the pipe (the child must not block)
+                    self._log_error = exc
+                    _close_quietly(log)
+                    log = None
+            try:
+                self.echo.write(data)
+                self.echo.flush()
+            except (OSError, ValueError):
+                pass
+        _close_quietly(log)
         stream.close()
+
+
+def _close_quietly(handle: BinaryIO | None) -> None:
+    """Close ``handle`` (if any), ignoring the error a full disk gives when the last bytes are flushed."""
+    if handle is not None:
+        try:
+            handle.close()
+        except OSError:
+            pass

@@ -1,8 +1,10 @@
 """Write the ``.sce`` files of a plan: clear an earlier generation, then stream one file per valid variant.
 
-:func:`generate` works in batches: the caller records a batch (store rows, committed) before its
-files are written, so a run stopped at any point leaves a row for every file; nothing is kept per
-variant beyond the current batch.
+:func:`generate` works in batches: a batch's files are written (each whole, or not at all), then the
+caller records the batch (store rows, committed), so a store row never names a file that was not
+written, and a run stopped at any point leaves at most the batch under way written but not yet
+recorded (its files carry the generation marker, so the next generation replaces them). Nothing is
+kept per variant beyond two batches.
 """
 
 from __future__ import annotations
@@ -147,7 +149,7 @@ def _same_content(path: str, data: bytes) -> bool:
 
 #: From this many combinations on, files are written by a forked helper process (see writer.py).
 BACKGROUND_FROM = 5000
-#: Variants whose store rows are committed together (before their files are written).
+#: Variants whose files are written, then whose store rows are committed, together.
 BATCH_SIZE = 2000
 
 
@@ -160,18 +162,42 @@ class GenerationResult:
     stopped: bool
 
 
+class VariantWriteError(Exception):
+    """A variant's file could not be written; every variant whose file was written is recorded.
+
+    ``cause`` is the :class:`OSError` (its ``filename`` the variant's path), ``recorded`` how many
+    variants were written and recorded in all.
+    """
+
+    def __init__(self, cause: OSError, recorded: int) -> None:
+        super().__init__(str(cause))
+        self.cause, self.recorded = cause, recorded
+
+
+@dataclass(slots=True)
+class _Batch:
+    """Variants sent to the writer, waiting for their files to be on disk before they are recorded."""
+
+    items: list[Generated]
+    checkpoint: int
+
+
 def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Container[str] = (), *,
              record: Callable[[list[Generated]], None] | None = None,
              on_item: Callable[[Generated], None] | None = None,
              stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE) -> GenerationResult:
     """Write every valid combination of ``plan`` to ``output_dir``, in batches.
 
-    For each batch of up to ``batch_size`` valid variants, ``record(batch)`` is called first (the
-    caller commits their store rows), then their files are written, then ``on_item`` is called for
-    each (skipped combinations go to ``on_item`` as they come). So at any moment every file written
-    has been recorded. ``stop()`` is asked before each combination; when it says yes, the batch made
-    so far is recorded and written and generation ends (``stopped`` in the result). Nothing is kept
-    per variant beyond the current batch, so memory does not grow with their number.
+    For each batch of up to ``batch_size`` valid variants, their files are written (each whole, under
+    a temporary name renamed over its own), then ``record(batch)`` is called (the caller commits their
+    store rows), then ``on_item`` is called for each (skipped combinations go to ``on_item`` as they
+    come). So a store row never names a file that was not written. With the background writer the
+    next batch is rendered while the child writes the last one, and a batch is recorded once the
+    child confirms its files. If a file cannot be written, the variants of the batches under way
+    whose files were written are recorded, and :class:`VariantWriteError` says how many are in all. ``stop()`` is asked before
+    each combination; when it says yes, the batch made so far is written and recorded and generation
+    ends (``stopped`` in the result). Nothing is kept per variant beyond two batches, so memory does
+    not grow with their number.
 
     The folder is created if needed. Files are written as UTF-8 bytes exactly as hashed, so the
     stored content hash always matches the file. A file named in ``existing`` (names of the earlier
@@ -187,20 +213,30 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     written = skipped = 0
     stopped = False
     batch: list[Generated] = []
-    writes: list[tuple[str, bytes]] = []
-    with FileWriter(background=plan.total >= BACKGROUND_FROM) as writer:
+    unrecorded: list[_Batch] = []
+    writer = FileWriter(background=plan.total >= BACKGROUND_FROM)
 
-        def flush() -> None:
+    def settle(keep: int) -> None:
+        """Record every sent batch but the last ``keep`` once its files are on disk."""
+        nonlocal written
+        while len(unrecorded) > keep:
+            done = unrecorded[0]
+            writer.wait(done.checkpoint)
             if record is not None:
-                record(batch)
-            for path, data in writes:
-                writer.write(path, data)
+                record(done.items)
+            unrecorded.pop(0)
+            written += len(done.items)
             if on_item is not None:
-                for item in batch:
+                for item in done.items:
                     on_item(item)
-            batch.clear()
-            writes.clear()
 
+    def send() -> None:
+        if batch:
+            unrecorded.append(_Batch(batch.copy(), writer.checkpoint()))
+            batch.clear()
+        settle(keep=1)
+
+    try:
         for index, choices, rejection in plan.combinations():
             if stop is not None and stop():
                 stopped = True
@@ -216,13 +252,33 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
             batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(),
                                    _assignment(fragments, choices), None))
             if not (existing and os.path.basename(path) in existing and _same_content(path, data)):
-                writes.append((path, data))
+                writer.write(path, data)
             if len(batch) >= batch_size:
-                written += len(batch)
-                flush()
-        written += len(batch)
-        flush()
+                send()
+        send()
+        writer.close()
+        settle(keep=0)
+    except OSError as exc:
+        _end(writer)
+        # The batches under way were written in part: record exactly the files that hold their text
+        # (the others are absent or still an earlier generation's, whose rows stay right).
+        landed = [item for done in [*unrecorded, _Batch(batch, 0)] for item in done.items
+                  if item.path and item.sce_text is not None and _same_content(item.path, item.sce_text.encode())]
+        if landed and record is not None:
+            record(landed)
+            written += len(landed)
+        raise VariantWriteError(exc, written) from exc
+    finally:
+        _end(writer)
     return GenerationResult(written, skipped, stopped)
+
+
+def _end(writer: FileWriter) -> None:
+    """Let the writer's child finish what it was sent (after an error elsewhere) without hiding that error."""
+    try:
+        writer.close()
+    except OSError:
+        pass
 
 
 def _assignment(fragments: list[list[str]], choices: tuple[int, ...]) -> str:

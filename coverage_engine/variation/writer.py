@@ -1,39 +1,77 @@
-"""Write many small files, optionally in a forked helper process.
+"""Write many small files, optionally in a forked helper process, each one whole or not at all.
 
 Creating a file costs tens of microseconds of kernel time on common file systems (more on ext4 with
 ``discard`` or under load); for 100,000 variants that alone is several seconds. Threads do not help
 (creations in one directory serialise on its lock, and each file would need the GIL back). So for
-large generations a forked child does the ``open``/``write``/``close`` calls while the parent renders
+large generations a forked child does the ``open``/``write``/``rename`` calls while the parent renders
 the next texts and fills the store: the two run on different cores.
 
-The parent sends ``(path, bytes)`` records through a pipe in ~1 MB batches. If the child fails (disk
-full, permission), :meth:`FileWriter.close` raises :class:`OSError` with its message. The child
-ignores SIGINT and SIGTERM: on Ctrl-C the parent stops sending, and the child still writes every
-file it was sent (whose store rows the parent has committed) before it ends.
+Every file is written under a temporary name beside it (``.<name>.part``, created without following
+links) and renamed over the final name, so a full disk, a kill or a planted symbolic link never leaves
+a cut-short file under a variant's name nor writes through a link. :meth:`FileWriter.checkpoint` and
+:meth:`FileWriter.wait` let the caller learn when everything written before a checkpoint is on disk,
+so it records files only once they exist.
+
+The parent sends ``(path, bytes)`` records through a pipe in ~1 MB batches; a checkpoint is a record
+with an empty path, answered with one byte on a second pipe. If the child fails (disk full,
+permission) it reports the errno and path, and the next :meth:`~FileWriter.wait` or
+:meth:`~FileWriter.close` raises that :class:`OSError`. The child ignores SIGINT and SIGTERM: on
+Ctrl-C the parent stops sending, and the child still writes every file it was sent before it ends.
 """
 
 from __future__ import annotations
 
+import errno
+import json
 import os
 import signal
 import struct
 import sys
 
 _HEADER = struct.Struct("!II")
-#: ``O_NOFOLLOW``: a symbolic link planted under a variant's name is never written through.
+#: ``O_NOFOLLOW``: a symbolic link planted under a temporary name is never written through.
 _FLAGS = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0) | getattr(os, "O_NOFOLLOW", 0)
 _BATCH = 1 << 20
+#: Suffix of the temporary name a file is written under before it is renamed to its own.
+PART_SUFFIX = ".part"
+
+
+def temporary_name(path: str) -> str:
+    """``dir/.name.part`` for ``dir/name``: hidden, and never matched as a variant (``*.sce``)."""
+    head, tail = os.path.split(path)
+    return os.path.join(head, f".{tail}{PART_SUFFIX}")
 
 
 def write_file(path: str, data: bytes) -> None:
-    """Write ``data`` to ``path`` (created or truncated), all of it."""
-    fd = os.open(path, _FLAGS, 0o644)
+    """Make ``path`` hold ``data``, all of it or (on any error) none of it; raises :class:`OSError`.
+
+    The data goes to a temporary name first, which is renamed over ``path``: a link at ``path`` is
+    replaced, not followed, and a failure leaves whatever was at ``path`` before.
+    """
+    part = temporary_name(path)
     try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view):]
-    finally:
-        os.close(fd)
+        fd = os.open(part, _FLAGS, 0o644)
+    except OSError as exc:
+        if exc.errno not in (errno.ELOOP, errno.EMLINK):
+            raise
+        os.unlink(part)  # a link planted under the temporary name: remove the link itself, then create
+        fd = os.open(part, _FLAGS, 0o644)
+    try:
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+        finally:
+            os.close(fd)
+        os.replace(part, path)
+    except OSError as exc:
+        try:
+            os.unlink(part)
+        except OSError:
+            pass
+        if exc.filename is None:  # os.write names no file: say which one could not be written
+            raise OSError(exc.errno, exc.strerror, path) from None
+        raise
 
 
 class FileWriter:
@@ -43,12 +81,14 @@ class FileWriter:
         self._pid = 0
         self._pending: list[bytes] = []
         self._size = 0
+        self._checkpoints = self._confirmed = 0
+        self._error: OSError | None = None
         if background and hasattr(os, "fork"):
             self._start()
 
     def _start(self) -> None:
         read_end, self._pipe = os.pipe()
-        error_read, error_write = os.pipe()
+        ack_read, ack_write = os.pipe()
         sys.stdout.flush()
         sys.stderr.flush()
         pid = os.fork()
@@ -58,19 +98,22 @@ class FileWriter:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
             signal.signal(signal.SIGTERM, signal.SIG_IGN)
             os.close(self._pipe)
-            os.close(error_read)
+            os.close(ack_read)
             code = 0
             try:
-                _serve(read_end)
+                _serve(read_end, ack_write)
             except BaseException as exc:  # noqa: BLE001 - reported to the parent
-                os.write(error_write, str(exc).encode("utf-8", "replace")[:4000])
+                report = {"errno": getattr(exc, "errno", None), "strerror": getattr(exc, "strerror", None),
+                          "filename": getattr(exc, "filename", None), "text": str(exc)}
+                _write_all(ack_write, b"E" + json.dumps(report).encode("utf-8", "replace")[:8000])
                 code = 1
             os._exit(code)
         os.close(read_end)
-        os.close(error_write)
-        self._pid, self._errors = pid, error_read
+        os.close(ack_write)
+        self._pid, self._acks = pid, ack_read
 
     def write(self, path: str, data: bytes) -> None:
+        """Write ``data`` to ``path`` (now, or in the child soon); raises :class:`OSError` when it cannot."""
         if not self._pid:
             write_file(path, data)
             return
@@ -79,6 +122,29 @@ class FileWriter:
         self._size += len(encoded) + len(data) + _HEADER.size
         if self._size >= _BATCH:
             self._flush()
+
+    def checkpoint(self) -> int:
+        """Mark everything written so far; :meth:`wait` with the number returned waits until it is on disk."""
+        self._checkpoints += 1
+        if self._pid:
+            self._pending.append(_HEADER.pack(0, 0))
+            self._flush()
+        else:
+            self._confirmed = self._checkpoints
+        return self._checkpoints
+
+    def wait(self, checkpoint: int) -> None:
+        """Block until every file written before ``checkpoint`` is on disk; raises the child's :class:`OSError`."""
+        while self._confirmed < checkpoint:
+            if not self._pid:
+                raise self._error or OSError("the file writer process ended early")
+            answer = os.read(self._acks, 1)
+            if answer == b"+":
+                self._confirmed += 1
+            else:
+                self._finish(answer)  # raises the child's error, or the child ended early
+                if self._confirmed < checkpoint:
+                    raise OSError("the file writer process ended early")
 
     def _flush(self) -> None:
         if not self._pending:
@@ -89,27 +155,34 @@ class FileWriter:
             while view:
                 view = view[os.write(self._pipe, view):]
         except BrokenPipeError:
-            self._finish()  # raises the child's error
+            self._finish(os.read(self._acks, 1))  # raises the child's error
             raise
 
     def close(self) -> None:
         """Wait until every file is written; raises :class:`OSError` if one could not be."""
         if self._pid:
-            try:
-                self._flush()
-            finally:
-                self._finish()
+            self.wait(self.checkpoint())
+            self._finish(b"")
 
-    def _finish(self) -> None:
+    def _finish(self, first: bytes) -> None:
+        """End the child (closing its input), count its last acknowledgements, raise the error it reported."""
         if not self._pid:
+            if self._error is not None:
+                raise self._error
             return
         os.close(self._pipe)
+        chunks = [first]
+        while chunk := os.read(self._acks, 65536):
+            chunks.append(chunk)
+        answers = b"".join(chunks)
+        report = answers.lstrip(b"+")
+        self._confirmed += len(answers) - len(report)
         _pid, status = os.waitpid(self._pid, 0)
         self._pid = 0
-        message = os.read(self._errors, 4000).decode("utf-8", "replace")
-        os.close(self._errors)
-        if os.waitstatus_to_exitcode(status) != 0:
-            raise OSError(message or "the file writer process failed")
+        os.close(self._acks)
+        if report or os.waitstatus_to_exitcode(status) != 0:
+            self._error = _child_error(report[1:], status)
+            raise self._error
 
     def __enter__(self) -> FileWriter:
         return self
@@ -119,13 +192,31 @@ class FileWriter:
             self.close()
             return
         try:  # an error is on its way already: wait for the child, but do not hide that error
-            self.close()
+            if self._pid:
+                self._finish(b"")
         except OSError:
             pass
 
 
-def _serve(fd: int) -> None:  # pragma: no cover - runs in the child
-    """Read records from ``fd`` until end of file and write them."""
+def _child_error(payload: bytes, status: int) -> OSError:
+    """The :class:`OSError` the child reported (``payload``), or one saying how it ended."""
+    try:
+        report = json.loads(payload.decode("utf-8", "replace"))
+    except ValueError:
+        return OSError(f"the file writer process failed (exit status {os.waitstatus_to_exitcode(status)})")
+    if report.get("errno") is not None:
+        return OSError(report["errno"], report.get("strerror") or report.get("text"), report.get("filename"))
+    return OSError(report.get("text") or "the file writer process failed")
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _serve(fd: int, acks: int) -> None:  # pragma: no cover - runs in the child
+    """Read records from ``fd`` until end of file and write them; answer each checkpoint on ``acks``."""
     buffer = bytearray()
     position = 0
     while True:
@@ -139,8 +230,11 @@ def _serve(fd: int) -> None:  # pragma: no cover - runs in the child
             if len(buffer) < end:
                 break
             start = position + _HEADER.size
-            path = bytes(buffer[start:start + path_len]).decode("utf-8", "surrogateescape")
-            write_file(path, bytes(buffer[start + path_len:end]))
+            if path_len:
+                path = bytes(buffer[start:start + path_len]).decode("utf-8", "surrogateescape")
+                write_file(path, bytes(buffer[start + path_len:end]))
+            else:
+                _write_all(acks, b"+")
             position = end
         if position:
             del buffer[:position]

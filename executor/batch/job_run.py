@@ -17,7 +17,16 @@ from typing import BinaryIO
 
 from executor.batch.builtin_runner import BUILTIN_COMMAND
 from executor.batch.inputs import substitute
-from executor.batch.verdict import COVERAGE_FILE, LOG_FILE, RESULT_FILE, FileMark, judge, launch_failure
+from executor.batch.verdict import (
+    COVERAGE_FILE,
+    LOG_FILE,
+    RESULT_FILE,
+    FileMark,
+    disk_full,
+    disk_full_result,
+    judge,
+    launch_failure,
+)
 from executor.hooks import run_post_hooks
 from executor.process import ChildProcess, Launcher
 from store.jobs import Batch, Job, JobResult
@@ -119,8 +128,8 @@ class JobRun:
         try:
             result = self._attempt(problems)
         except OSError as exc:
-            result = launch_failure(self.output_dir, started, time.time(),
-                                    f"cannot start the launch command: {exc.strerror or exc}")
+            result = disk_full_result(self.output_dir, started, time.time()) if disk_full(exc) else launch_failure(
+                self.output_dir, started, time.time(), f"cannot start the launch command: {exc.strerror or exc}")
         except Exception as exc:  # noqa: BLE001 - an attempt must always end with a result
             result = launch_failure(self.output_dir, started, time.time(), f"internal error: {exc!r}")
         self.events.put(Done(self, result, problems))

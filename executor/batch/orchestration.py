@@ -20,6 +20,7 @@ from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
+from executor.batch.verdict import disk_full
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.junit import write_report
 from store.jobs import Batch, BatchOptions
@@ -204,18 +205,46 @@ def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
     return summary, (received[0] if received else None)
 
 
+@dataclass(frozen=True)
+class LocalRun:
+    """How a local run ended: the batch's counts, the signal that stopped it, and a full disk that did."""
+
+    counts: dict[JobState, int]
+    signum: int | None = None
+    #: The output folder whose disk filled up (the run stopped there; ``--resume`` finishes it), else None.
+    disk_full: str | None = None
+    #: Why the merged report could not be written (a full disk), else None.
+    report_error: str | None = None
+
+
+#: How the merged report names a run that a full disk stopped.
+DISK_FULL_NAME = "no space left on device"
+
+
 def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *,
-              lease: float = DEFAULT_LEASE) -> tuple[dict[JobState, int], int | None]:
-    """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report."""
+              lease: float = DEFAULT_LEASE) -> LocalRun:
+    """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report.
+
+    A full disk stops the run like an interruption (the jobs it stopped stay resumable); the report of
+    what finished is still attempted, and if it cannot be written either, the run says so instead of
+    failing: the store holds every result, and ``report`` writes it once there is room.
+    """
     counts = store.counts(batch.id)
     total = sum(counts.values())
     done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
     settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
                               echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd())
-    _summary, signum = run_worker(store, settings, reporter, total, done)
+    summary, signum = run_worker(store, settings, reporter, total, done)
     interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
-    counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
-    return counts, signum
+    if summary.disk_full is not None and interrupted is None:
+        interrupted = DISK_FULL_NAME
+    try:
+        counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
+    except BatchError as exc:
+        if summary.disk_full is None and not (exc.__cause__ and disk_full(exc.__cause__)):
+            raise
+        return LocalRun(store.counts(batch.id), signum, summary.disk_full or batch.output_dir, str(exc))
+    return LocalRun(counts, signum, summary.disk_full)
 
 
 def check_report_path(path: str | os.PathLike[str]) -> None:
@@ -247,6 +276,9 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     return store.counts(batch.id)
 
 
+#: Exit code of a batch that did not pass, or could not go on (a full disk).
+EXIT_FAILED = 1
+
 #: Exit code of a batch with no job at all (an empty shard): pytest's "no tests collected", not a green run.
 EXIT_NOTHING_RAN = 5
 
@@ -258,7 +290,7 @@ def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
     total = sum(counts.values())
     if not total:
         return EXIT_NOTHING_RAN
-    return 0 if counts[JobState.PASSED] == total else 1
+    return 0 if counts[JobState.PASSED] == total else EXIT_FAILED
 
 
 def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:

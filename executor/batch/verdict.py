@@ -4,11 +4,13 @@ A job passes when its process exits 0 and its test.xml has testcases and no fail
 ``ignore_return_value`` judges by test.xml alone. No readable test.xml, a death by signal, a
 non-zero exit although test.xml passed, and a timeout are infrastructure errors (``error`` /
 ``timeout``) that ``--retries`` may repeat; a scenario that ran and failed is ``failed`` and never
-repeated.
+repeated. An attempt that ended without a result because the disk holding its folder is full is
+neither: it is ``cancelled`` with :data:`DISK_FULL_REASON` (the batch stops; ``--resume`` runs it again).
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 from dataclasses import dataclass
@@ -26,6 +28,30 @@ COVERAGE_FILE = "coverage.json"
 
 #: Largest coverage.json read with a job's result.
 COVERAGE_MAX_BYTES = 16 * 1024 * 1024
+
+#: The reason recorded on a job stopped by a full disk; the worker stops the batch when it sees it.
+DISK_FULL_REASON = "not finished: no space left on the device holding its folder"
+
+#: Below this many free bytes (or with no free inode) a file system counts as full.
+LOW_SPACE_BYTES = 64 * 1024
+
+#: Errors that mean "the disk is full", whoever met them.
+DISK_FULL_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
+
+
+def out_of_space(folder: Path) -> bool:
+    """Whether the file system holding ``folder`` has (next to) no room left for another file."""
+    try:
+        st = os.statvfs(folder)
+    except (OSError, AttributeError):
+        return False
+    free_blocks = st.f_bfree if os.geteuid() == 0 else st.f_bavail   # root may use the reserved blocks
+    return free_blocks * st.f_frsize < LOW_SPACE_BYTES or (st.f_files > 0 and st.f_favail == 0)
+
+
+def disk_full(exc: BaseException) -> bool:
+    """Whether ``exc`` says the disk (or the user's quota) is full."""
+    return isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS
 
 
 @dataclass(frozen=True)
@@ -137,6 +163,8 @@ def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_r
         status, reason = JobState.ERROR, f"exit code {rc} although its test.xml passed"
     else:
         status, reason = JobState.PASSED, None
+    if status is JobState.ERROR and (outcome.disk_full or out_of_space(output_dir)):
+        status, reason = JobState.CANCELLED, DISK_FULL_REASON
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,
                      finished_at=outcome.finished_at, reason=reason, junit_xml=xml_text,
                      log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
@@ -149,4 +177,11 @@ def launch_failure(output_dir: Path, started_at: float, finished_at: float, mess
     """The result of an attempt whose command could not even be started."""
     return JobResult(status=JobState.ERROR, exit_code=None, started_at=started_at, finished_at=finished_at,
                      reason=message, log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
+                     log_path=str(output_dir / LOG_FILE))
+
+
+def disk_full_result(output_dir: Path, started_at: float, finished_at: float) -> JobResult:
+    """The result of an attempt the full disk kept from running or from writing its result."""
+    return JobResult(status=JobState.CANCELLED, exit_code=None, started_at=started_at, finished_at=finished_at,
+                     reason=DISK_FULL_REASON, log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
                      log_path=str(output_dir / LOG_FILE))

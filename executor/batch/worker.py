@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, BinaryIO
 from executor.batch.builtin_runner import ForkServer, ForkServerError
 from executor.batch.job_run import Done, JobRun, Started, job_marker
 from executor.batch.progress import Reporter
-from executor.batch.verdict import launch_failure
+from executor.batch.verdict import DISK_FULL_REASON, disk_full, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
 from executor.process import RUNNER_ENV, end_orphan_group
 from store.database import StoreError
@@ -79,6 +79,8 @@ class WorkerSummary:
     verdicts: Counter = field(default_factory=Counter)
     interrupted: bool = False
     nothing_to_do: bool = False
+    #: The output folder whose disk filled up (the worker stopped there), else None.
+    disk_full: str | None = None
 
 
 def process_alive(pid: int | None) -> bool:
@@ -278,6 +280,12 @@ class Worker:
         except StoreError:
             raise
         except OSError as exc:
+            if disk_full(exc):
+                self._runs[job.id] = run = JobRun(job, batch, output_dir, job.scenario_path, self._events)
+                self._started += 1
+                self.reporter.job_started(job)
+                self._events.put(Done(run, disk_full_result(output_dir, began, time.time())))
+                return
             scenario, problem = job.scenario_path, f"cannot prepare the job: {exc.strerror or exc}" + (
                 f": {exc.filename}" if exc.filename else "")
         except Exception as exc:  # noqa: BLE001 - one job that cannot be prepared must not end the loop
@@ -405,6 +413,11 @@ class Worker:
             return
         result, job = event.result, run.job
         retrying = False
+        if result.reason == DISK_FULL_REASON and self.summary.disk_full is None:
+            self.summary.disk_full = str(run.output_dir.parent)
+            self.reporter.warn(f"no space left on the device holding {run.output_dir.parent}: stopping (the jobs "
+                               "under way are stopped; make room, then finish with --resume)")
+            self.stop()
         try:
             if result.status is JobState.CANCELLED:
                 self.store.cancel(job, result)

@@ -7,9 +7,10 @@ orchestrators stand (``cli → executor → coverage_engine | store``).
 
 Order matters for "bad input loses nothing already written": the input is parsed and every value
 checked, and the store opened, *before* an earlier generation in the output folder is touched; it
-is removed only once the new generation is written and recorded completely. SIGINT and SIGTERM stop
-the generation before the next variant, after the batch under way is recorded and written, so
-every file on disk has its store row.
+is removed only once the new generation is written and recorded completely. Each batch of files is
+written before its store rows are committed, so no row names a file that is not there. SIGINT and
+SIGTERM stop the generation before the next variant, after the batch under way is written and
+recorded, so every file on disk has its store row.
 """
 
 from __future__ import annotations
@@ -63,6 +64,10 @@ class OutputFolderBusy(OscError):
 
 class OutputNameTooLong(OscError):
     """the variants' file names would exceed what the file system allows"""
+
+
+class VariantsNotWritten(OscError):
+    """a variant's file could not be written (disk full, permission, file system limit)"""
 
 
 class ForeignFilesInOutput(OscError):
@@ -180,7 +185,13 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None) -> int:
-    from coverage_engine.variation.output import generate, remove_files, source_sha256, survey_output
+    from coverage_engine.variation.output import (
+        VariantWriteError,
+        generate,
+        remove_files,
+        source_sha256,
+        survey_output,
+    )
     from store.database import StoreError
     from store.variants import VariantRecord, VariationRecorder
 
@@ -249,11 +260,21 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     progress = report.Progress(plan.total)
     try:
         with _StopRequest() as stop:
-            result = generate(plan, output_dir, existing=frozenset(old), record=record, on_item=on_item,
-                              stop=stop)
+            try:
+                result = generate(plan, output_dir, existing=frozenset(old), record=record, on_item=on_item,
+                                  stop=stop)
+            except VariantWriteError as exc:
+                recorder.finish(complete=False)
+                cause = exc.cause
+                what = f"cannot write {cause.filename}" if cause.filename else "cannot write the variant files"
+                raise VariantsNotWritten(
+                    f"{what}: {cause.strerror or cause}; {exc.recorded} of {plan.valid_count()} variant(s) were "
+                    f"written (and recorded) before it stopped" + (f"; {kept}" if old else ""), Location(str(plan.path), 0, 0),
+                    hint="make room (or write to another folder with -o) and run again: the files written "
+                         "now are replaced") from None
             recorder.finish(complete=not result.stopped)
     except StoreError as exc:
-        raise VariationStoreError(f"{exc} (the .sce files written so far are in {output_dir}/ and recorded; "
+        raise VariationStoreError(f"{exc} (the .sce files recorded so far are in {output_dir}/; "
                                   f"{kept})") from exc
     finally:
         progress.close()
@@ -318,7 +339,7 @@ class _ModelLog:
 class _StopRequest:
     """While active, SIGINT and SIGTERM only ask the generation to stop before the next variant.
 
-    The batch under way is then recorded and written, so every file on disk has its store row.
+    The batch under way is then written and recorded, so every file on disk has its store row.
     """
 
     def __init__(self) -> None:

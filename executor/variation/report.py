@@ -52,6 +52,10 @@ def slot_sizes(plan: VariationPlan) -> str:
     return " x ".join(str(slot.count) for slot in plan.slots)
 
 
+#: Values of a dimension shown one by one; a longer dimension shows its first and last ones.
+SHOW_VALUES_UP_TO = 20
+
+
 def describe(plan: VariationPlan) -> None:
     """Say what will be varied (or that nothing is)."""
     if not plan.dimensions and plan.documents is None:
@@ -67,7 +71,10 @@ def describe(plan: VariationPlan) -> None:
             echo(f"{dim.location}: {dim.key}: range [{spec.text(spec.low)}..{spec.text(spec.high)}], "
                  f"{len(dim.choices)} value(s) drawn")
             continue
-        values = ", ".join(c.text for c in dim.choices)
+        texts = [c.text for c in dim.choices]
+        if len(texts) > SHOW_VALUES_UP_TO:        # a range [1..6000] is not worth 6000 numbers on the terminal
+            texts = [*texts[:SHOW_VALUES_UP_TO - 3], "…", *texts[-2:]]
+        values = ", ".join(texts)
         joint = ""
         if i in first_of:
             other = plan.dimensions[first_of[i]]

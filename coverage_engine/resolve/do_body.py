@@ -20,9 +20,9 @@ from coverage_engine.errors import (
 from coverage_engine.parse import syntax
 from coverage_engine.records import replace
 from coverage_engine.resolve import model
-from coverage_engine.resolve.keeps import extract_keep
-from coverage_engine.resolve.operations import bind_arguments, coerce
-from coverage_engine.resolve.scope import KeepValue, Scope
+from coverage_engine.resolve.keeps import KeepCheck, check_keep, classify_keep
+from coverage_engine.resolve.operations import bind_arguments, coerce, struct_value
+from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
 from coverage_engine.resolve.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
 from coverage_engine.resolve.values import apply_nested_keeps, instantiate, resolve_expression
 
@@ -165,6 +165,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     nested: dict[str, list[KeepValue]] = {}
     modifiers: list[syntax.ModifierInvocation] = []
     untils = []
+    conditions: list[KeepCheck] = []
     for member in node.with_members:
         if isinstance(member, syntax.ModifierInvocation):
             modifiers.append(member)
@@ -174,7 +175,11 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         if isinstance(member, syntax.Until):
             untils.append(member)
             continue
-        keep = extract_keep(member, scope)
+        found = classify_keep(member, scope)
+        if isinstance(found, KeepCheck):       # keep(it.speed > 1mps): checked once the arguments are known
+            conditions.append(found)
+            continue
+        keep = found
         if len(keep.path) > 1 and keep.path[0] in action.fields \
                 and isinstance(action.fields[keep.path[0]].type, CompoundType):
             # keep(it.pose.position.x == 1m): a member of a struct parameter, merged into its value below
@@ -189,6 +194,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
             raise ArgumentError(f"{what}: parameter '{keep.path[0]}' is given twice", member.location)
         keeps[keep.path[0]] = keep
     arguments: list[tuple[str, model.Expr]] = []
+    values: dict[str, TypedExpr] = {}
     for name, fdecl in action.fields.items():
         if name in bound:
             arg = bound[name]
@@ -208,6 +214,11 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         if name in nested:        # partial overrides merged into the value given, kept or defaulted
             value = apply_nested_keeps(scope.ctx, value, nested[name], name, node.location)
         arguments.append((name, value.expr))
+        values[name] = value
+    if conditions:
+        instance = struct_value(action, values)
+        for condition in conditions:
+            check_keep(condition, {}, instance)
     plugin_names = tuple(t.name for t in action.ancestry())
     call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
                             node.location, node.label is not None)

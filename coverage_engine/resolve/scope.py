@@ -75,6 +75,10 @@ class ResolveContext:
         self.building: list[str] = []
         #: Source text of each file, for quoting an expression as written (coverage items' ``ignore:``).
         self.texts: dict[str, str] = {}
+        #: Keep conditions: "check" (a violated one is an error), "skip" them, or "collect" each outcome
+        #: in :attr:`constraint_results` (``scenario_variation`` finds the combinations they exclude).
+        self.constraints = "check"
+        self.constraint_results: list[tuple[Location, bool]] = []
 
     def fresh_path(self, hint: str) -> str:
         """A unique key prefix for variables of an instance that has no name of its own."""

@@ -32,7 +32,7 @@ from coverage_engine.errors import (
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
-from coverage_engine.resolve.keeps import extract_keep
+from coverage_engine.resolve.keeps import KeepCheck, check_keep, classify_keep
 from coverage_engine.resolve.operations import (
     arithmetic_type,
     bind_arguments,
@@ -277,7 +277,9 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
                  prefix: str, location: Location, scope_names: dict[str, TypedExpr] | None,
                  override: OverrideHook | None, outer: Scope | None) -> TypedExpr:
     type_scope = Scope(ctx) if outer is None else outer.child()
-    all_keeps = [extract_keep(k, type_scope) for k in ctype.keeps] + list(keeps)
+    classified = [classify_keep(k, type_scope) for k in ctype.keeps]
+    checks = [k for k in classified if isinstance(k, KeepCheck)]
+    all_keeps = [k for k in classified if not isinstance(k, KeepCheck)] + list(keeps)
     direct: dict[str, list[KeepValue]] = {}
     nested: dict[str, list[KeepValue]] = {}
     for keep in all_keeps:
@@ -303,11 +305,13 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
             value = _kept_value(ctype, name, fdecl.type, value, direct[name])
         if value is None:
             value = field_value(ctx, fdecl.type, fdecl.default, fdecl.with_members, member_scope, key,
-                                fdecl.location, f"member '{name}'")
+                                fdecl.location, f"member '{name}'", check=False)
         if name in nested:
             value = apply_nested_keeps(ctx, value, nested[name], key, fdecl.location)
         if override is not None:
             value = override(name, value, FieldInfo(name, fdecl.type, fdecl.default, True, fdecl.location)) or value
+        for condition in with_conditions(fdecl.with_members, member_scope):   # on the final value
+            check_keep(condition, {}, value)
         values[name] = value
     for name, vdecl in ctype.variables.items():
         key = f"{prefix}.{name}" if prefix else name
@@ -326,7 +330,10 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
         variable = model.Variable(key, vdecl.type.name, initial.expr, vdecl.location)
         ctx.variables.append(variable)
         values[name] = TypedExpr(model.VariableRef(variable), vdecl.type, False)
-    return struct_value(ctype, values)
+    value = struct_value(ctype, values)
+    for check in checks:             # conditions on the members, once every member has its value
+        check_keep(check, values, value)
+    return value
 
 
 def _kept_value(ctype: CompoundType, name: str, mtype: OscType, given: TypedExpr | None,
@@ -356,12 +363,32 @@ def _kept_value(ctype: CompoundType, name: str, mtype: OscType, given: TypedExpr
 
 
 def field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression | None, with_members: tuple,
-                scope: Scope, key: str, location: Location, what: str) -> TypedExpr:
-    """The value of a member or global from its default (or its type's zero), with its ``with:`` keeps."""
-    keeps = [extract_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
+                scope: Scope, key: str, location: Location, what: str, *, check: bool = True) -> TypedExpr:
+    """The value of a member or global from its default (or its type's zero), with its ``with:`` keeps.
+
+    ``check``: also check the ``with:`` conditions (``keep(it >= 2m)``) on it; a caller that may still
+    replace the value (a parameter override) passes False and checks the final value itself.
+    """
+    classified = [classify_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
+    checks = [k for k in classified if isinstance(k, KeepCheck)]
+    keeps = [k for k in classified if not isinstance(k, KeepCheck)]
     for m in with_members:
         if isinstance(m, (syntax.ModifierInvocation, syntax.Until)):
             raise ResolveError(f"a modifier cannot be applied to {what}", m.location)
+    value = _field_value(ctx, ftype, default, keeps, scope, key, location, what)
+    for condition in checks if check else ():     # keep(it >= 2m): a condition on the value itself
+        check_keep(condition, {}, value)
+    return value
+
+
+def with_conditions(with_members: tuple, scope: Scope) -> list[KeepCheck]:
+    """The conditions among a declaration's ``with:`` keeps (``keep(it >= 2m)``)."""
+    found = [classify_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
+    return [k for k in found if isinstance(k, KeepCheck)]
+
+
+def _field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression | None, keeps: list[KeepValue],
+                 scope: Scope, key: str, location: Location, what: str) -> TypedExpr:
     whole = [k for k in keeps if not k.path]
     if whole:
         # ``p: T with: keep(it == v)`` gives the value itself; the last such keep wins over the default.

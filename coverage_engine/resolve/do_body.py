@@ -218,7 +218,7 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     if conditions:
         instance = struct_value(action, values)
         for condition in conditions:
-            check_keep(condition, {}, instance)
+            check_keep(condition, {}, instance, resolve_expression)
     plugin_names = tuple(t.name for t in action.ancestry())
     call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
                             node.location, node.label is not None)

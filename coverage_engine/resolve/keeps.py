@@ -9,13 +9,14 @@ concrete scenarios first; when a scenario runs it is an error.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from coverage_engine.errors import ResolveError, UnsupportedFeatureError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
-from coverage_engine.resolve.types import BOOL, STRING
+from coverage_engine.resolve.types import BOOL, STRING, CompoundType, OscType
 
 #: Operators whose keep is a condition (``==`` on a member path is a value, ``in`` a variation).
 _CONDITIONS = frozenset({"!=", "<", "<=", ">", ">=", "and", "or", "=>"})
@@ -78,7 +79,48 @@ def classify_keep(keep: syntax.KeepConstraint, scope: Scope) -> KeepValue | Keep
                                   "'keep(it.member == value)')", keep.location)
 
 
-def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | None = None) -> None:
+def split_type_keeps(ctype: CompoundType, scope: Scope) -> tuple[list[KeepValue], list[KeepCheck]]:
+    """The keeps among a type's members: values to apply, and (for a scenario) conditions to check.
+
+    A condition among the members of an actor or struct is refused: it would need a solver to choose
+    each instance's values (the reference tool refuses every keep but ``==`` there too).
+    """
+    values: list[KeepValue] = []
+    checks: list[KeepCheck] = []
+    for keep in ctype.keeps:
+        found = classify_keep(keep, scope)
+        if isinstance(found, KeepCheck):
+            if ctype.kind != "scenario":
+                raise UnsupportedFeatureError(
+                    f"not supported: a keep condition among the members of {ctype.kind} '{ctype.name}' (it would "
+                    "need a solver to choose each instance's values); fix a value with 'keep(member == value)', "
+                    "or put the condition in the scenario or in a 'with:' block", found.location)
+            checks.append(found)
+        else:
+            values.append(found)
+    return values, checks
+
+
+def split_with_keeps(with_members: tuple, scope: Scope) -> tuple[list[KeepValue], list[KeepCheck]]:
+    """A declaration's ``with:`` keeps: values to apply, and conditions (``keep(it >= 2m)``) to check."""
+    values: list[KeepValue] = []
+    checks: list[KeepCheck] = []
+    for member in with_members:
+        if isinstance(member, syntax.KeepConstraint):
+            found = classify_keep(member, scope)
+            if isinstance(found, KeepCheck):
+                checks.append(found)
+            else:
+                values.append(found)
+    return values, checks
+
+
+#: ``resolve_expression`` of :mod:`coverage_engine.resolve.values` (passed in: values imports this module).
+ResolveExpression = Callable[[syntax.Expression, Scope, "OscType | None"], TypedExpr]
+
+
+def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | None,
+               resolve_expression: ResolveExpression) -> None:
     """Check ``check`` with ``names`` (the members) and ``it`` in view; raise when it does not hold.
 
     The condition must be decidable from values known when the scenario is resolved (parameters,
@@ -88,8 +130,6 @@ def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | No
     ctx = check.scope.ctx
     if ctx.constraints == "skip":
         return
-    from coverage_engine.resolve.values import resolve_expression  # values imports this module
-
     scope = check.scope.child(names, it)
     _refuse_string_order(check.expression, scope, resolve_expression)
     value = resolve_expression(check.expression, scope, BOOL)

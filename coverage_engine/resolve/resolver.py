@@ -27,14 +27,20 @@ from coverage_engine.resolve.values import FieldInfo, global_value, instantiate
 
 
 def resolve(unit: syntax.CompilationUnit, base_dir: Path | str | None = None,
-            overrides: Mapping | None = None) -> model.ScenarioFile:
-    """Resolve ``unit``; ``base_dir`` is where relative imports and user modules are found."""
+            overrides: Mapping | None = None, *, constraints: str = "check",
+            collected: list[tuple[Location, bool]] | None = None) -> model.ScenarioFile:
+    """Resolve ``unit``; ``base_dir`` is where relative imports and user modules are found.
+
+    ``constraints`` says what to do with keep conditions (``keep(x > y)``): "check" them (a violated
+    one is a :class:`~coverage_engine.resolve.keeps.ConstraintViolation`), "skip" them, or "collect"
+    each one's location and outcome into ``collected``.
+    """
     base = Path(base_dir) if base_dir is not None else Path(unit.file).parent
     texts = {unit.file: unit.text}
     try:
         units, namespace = _prepared(unit, base)
         texts.update({u.file: u.text for u in units})
-        return _resolve(unit, units, base, overrides, namespace)
+        return _resolve(unit, units, base, overrides, namespace, constraints, collected)
     except OscError as exc:
         _attach_source_line(exc, texts)
         raise
@@ -68,8 +74,12 @@ def _prepared(unit: syntax.CompilationUnit, base: Path) -> tuple[list[syntax.Com
 
 
 def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], base: Path,
-             overrides: Mapping | None, namespace: Namespace) -> model.ScenarioFile:
+             overrides: Mapping | None, namespace: Namespace, constraints: str = "check",
+             collected: list[tuple[Location, bool]] | None = None) -> model.ScenarioFile:
     ctx = ResolveContext(namespace)
+    ctx.constraints = constraints
+    if collected is not None:
+        ctx.constraint_results = collected
     ctx.texts = {u.file: u.text for u in units}
     ctx.texts[unit.file] = unit.text
     for name in namespace.globals:

@@ -32,7 +32,7 @@ from coverage_engine.errors import (
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
-from coverage_engine.resolve.keeps import KeepCheck, check_keep, classify_keep
+from coverage_engine.resolve.keeps import check_keep, split_type_keeps, split_with_keeps
 from coverage_engine.resolve.operations import (
     arithmetic_type,
     bind_arguments,
@@ -277,9 +277,8 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
                  prefix: str, location: Location, scope_names: dict[str, TypedExpr] | None,
                  override: OverrideHook | None, outer: Scope | None) -> TypedExpr:
     type_scope = Scope(ctx) if outer is None else outer.child()
-    classified = [classify_keep(k, type_scope) for k in ctype.keeps]
-    checks = [k for k in classified if isinstance(k, KeepCheck)]
-    all_keeps = [k for k in classified if not isinstance(k, KeepCheck)] + list(keeps)
+    type_keeps, checks = split_type_keeps(ctype, type_scope)
+    all_keeps = type_keeps + list(keeps)
     direct: dict[str, list[KeepValue]] = {}
     nested: dict[str, list[KeepValue]] = {}
     for keep in all_keeps:
@@ -310,8 +309,8 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
             value = apply_nested_keeps(ctx, value, nested[name], key, fdecl.location)
         if override is not None:
             value = override(name, value, FieldInfo(name, fdecl.type, fdecl.default, True, fdecl.location)) or value
-        for condition in with_conditions(fdecl.with_members, member_scope):   # on the final value
-            check_keep(condition, {}, value)
+        for condition in split_with_keeps(fdecl.with_members, member_scope)[1]:   # on the final value
+            check_keep(condition, {}, value, resolve_expression)
         values[name] = value
     for name, vdecl in ctype.variables.items():
         key = f"{prefix}.{name}" if prefix else name
@@ -332,7 +331,7 @@ def _instantiate(ctx: ResolveContext, ctype: CompoundType, given: dict[str, Type
         values[name] = TypedExpr(model.VariableRef(variable), vdecl.type, False)
     value = struct_value(ctype, values)
     for check in checks:             # conditions on the members, once every member has its value
-        check_keep(check, values, value)
+        check_keep(check, values, value, resolve_expression)
     return value
 
 
@@ -369,22 +368,15 @@ def field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression 
     ``check``: also check the ``with:`` conditions (``keep(it >= 2m)``) on it; a caller that may still
     replace the value (a parameter override) passes False and checks the final value itself.
     """
-    classified = [classify_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
-    checks = [k for k in classified if isinstance(k, KeepCheck)]
-    keeps = [k for k in classified if not isinstance(k, KeepCheck)]
+    keeps, checks = split_with_keeps(with_members, scope)
     for m in with_members:
         if isinstance(m, (syntax.ModifierInvocation, syntax.Until)):
             raise ResolveError(f"a modifier cannot be applied to {what}", m.location)
     value = _field_value(ctx, ftype, default, keeps, scope, key, location, what)
     for condition in checks if check else ():     # keep(it >= 2m): a condition on the value itself
-        check_keep(condition, {}, value)
+        check_keep(condition, {}, value, resolve_expression)
     return value
 
-
-def with_conditions(with_members: tuple, scope: Scope) -> list[KeepCheck]:
-    """The conditions among a declaration's ``with:`` keeps (``keep(it >= 2m)``)."""
-    found = [classify_keep(k, scope) for k in with_members if isinstance(k, syntax.KeepConstraint)]
-    return [k for k in found if isinstance(k, KeepCheck)]
 
 
 def _field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression | None, keeps: list[KeepValue],

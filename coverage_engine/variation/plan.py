@@ -33,6 +33,12 @@ from typing import TYPE_CHECKING
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
+from coverage_engine.variation.conditions import (
+    ConstraintTables,
+    Evaluate,
+    condition_evaluator,
+    find_conditions,
+)
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.template import TextTemplate
 
@@ -101,6 +107,14 @@ class VariationPlan:
     _bad: list[set[int]] = field(default_factory=list)
     #: The combinations a strategy chose (choice index per axis), in generation order; None: the full product.
     rows: list[tuple[int, ...]] | None = None
+    #: The choice per axis every value was checked against (set by :func:`check_plan`).
+    reference: list[int] = field(default_factory=list)
+    #: The keep conditions and what they forbid (None: the file has none).
+    constraints: ConstraintTables | None = None
+    #: Combinations left out because they break a keep condition (full product or drawn rows).
+    excluded: int = 0
+    #: Per condition text, how many combinations it left out.
+    excluded_by: dict[str, int] = field(default_factory=dict)
 
     # -- axes ---------------------------------------------------------------------------------------
 
@@ -200,14 +214,18 @@ def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
 
 
 def default_resolver(path: Path) -> Resolve:
-    """Parse and resolve concrete texts of ``path`` (imports relative to its folder)."""
+    """Parse and resolve concrete texts of ``path`` (imports relative to its folder).
+
+    Keep conditions are skipped here: a value is checked with the other slots at their reference,
+    and whether a *combination* breaks a condition is :mod:`coverage_engine.variation.conditions`' job.
+    """
     from coverage_engine.parse.parser import parse_text
     from coverage_engine.resolve.resolver import resolve
 
     file, base = str(path), path.parent
 
     def run(text: str, overrides: Mapping | None) -> ScenarioFile:
-        return resolve(parse_text(text, file), base_dir=base, overrides=overrides)
+        return resolve(parse_text(text, file), base_dir=base, overrides=overrides, constraints="skip")
 
     return run
 
@@ -260,9 +278,43 @@ def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: s
     return plan
 
 
-def check_plan(plan: VariationPlan, resolver: Resolve | None = None) -> None:
-    """Steps 1 and 2 of the module docstring (raises :class:`OscError` if no value makes the file resolve)."""
+def check_plan(plan: VariationPlan, resolver: Resolve | None = None, evaluate: Evaluate | None = None, *,
+               exclude: bool = True) -> None:
+    """Steps 1 and 2 of the module docstring (raises :class:`OscError` if no value makes the file resolve),
+    then the keep conditions: the combinations (or drawn rows) that break one are left out.
+
+    ``exclude`` False finds what the conditions forbid without listing the combinations left (a covering
+    array is built around them instead of filtering the full product, which may be astronomically large).
+    """
     _check(plan, resolver or default_resolver(plan.path))
+    conditions = find_conditions(plan.unit, plan.text, plan.dimensions, plan.documents is not None)
+    if not conditions:
+        return
+    plan.constraints = ConstraintTables(
+        conditions, plan.sizes, plan.reference, lambda c: (plan.concrete_text(c), plan.overrides(c)),
+        evaluate or condition_evaluator(plan.path),
+        frozenset(i for i, d in enumerate(plan.dimensions) if d.continuous is not None))
+    plan.resolutions += plan.constraints.resolutions
+    if not exclude or not any(c.forbidden or c.per_row for c in conditions):
+        return
+    if plan.rows is None:
+        plan.rows = list(itertools.product(*(range(n) for n in plan.sizes)))
+    exclude_rows(plan)
+
+
+def exclude_rows(plan: VariationPlan) -> None:
+    """Leave out the rows of ``plan.rows`` that break a keep condition (counted in ``plan.excluded``)."""
+    if plan.constraints is None or plan.rows is None:
+        return
+    kept = []
+    for row in plan.rows:
+        broken = plan.constraints.violated(row)
+        if broken is None:
+            kept.append(row)
+        else:
+            plan.excluded += 1
+            plan.excluded_by[broken.text] = plan.excluded_by.get(broken.text, 0) + 1
+    plan.rows = kept
 
 
 def _check(plan: VariationPlan, resolver: Resolve) -> None:
@@ -299,6 +351,10 @@ def _check(plan: VariationPlan, resolver: Resolve) -> None:
             break
         reference[culprit] = following
     else:
+        plan.reference = [0] * len(plan.sizes)
+        for slot, option in zip(slots, reference, strict=True):
+            for dim, choice in slot.choices(option).items():
+                plan.reference[dim] = choice
         for s, slot in enumerate(slots):
             for option in _options_to_check(plan, slot):
                 if option != reference[s] and option not in errors[s]:

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from coverage_engine.errors import OscError, ResolveError
+from coverage_engine.variation.conditions import ConstraintTables
 from coverage_engine.variation.dimensions import Choice, Dimension
 from coverage_engine.variation.plan import VariationPlan, _slots
 from coverage_engine.variation.template import TextTemplate
@@ -101,6 +102,41 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     plan.rows = [tuple(r) for r in rows]
 
 
+#: A sampler whose draws keep conditions reject draws up to this many times the samples asked for.
+MAX_OVERSAMPLING = 64
+
+
+def oversampled(options: StrategyOptions, factor: int) -> StrategyOptions:
+    """``options`` drawing ``factor`` times the samples (a sampler redrawing after rejections)."""
+    if factor == 1 or options.strategy not in SAMPLERS or options.samples is None:
+        return options
+    return replace(options, samples=options.samples * factor)
+
+
+def enough_samples(plan: VariationPlan, options: StrategyOptions, factor: int) -> bool:
+    """After the keep conditions left out some draws: keep the first ``samples`` rows, or ask for more.
+
+    True when the plan is final (not a sampler, nothing left out, or enough rows kept: the first
+    ``samples`` are kept, in draw order). False when a larger draw should be tried. When even
+    :data:`MAX_OVERSAMPLING` times the samples do not give enough, the condition that left out the
+    most draws is named in a :class:`StrategyError`.
+    """
+    if options.strategy not in SAMPLERS or options.samples is None or plan.rows is None:
+        return True
+    if len(plan.rows) >= options.samples:
+        plan.rows = plan.rows[:options.samples]
+        return True
+    if factor < MAX_OVERSAMPLING and plan.rows is not None:
+        return False
+    worst = max(plan.excluded_by.items(), key=lambda item: item[1])
+    where = next((c.location for c in plan.constraints.conditions if c.text == worst[0]), None) \
+        if plan.constraints is not None else None
+    raise StrategyError(
+        f"only {len(plan.rows)} of {options.samples * factor} drawn variants satisfy the keep conditions "
+        f"({worst[0]} left out {worst[1]}); --samples {options.samples} cannot be reached", where,
+        hint="widen the ranges, loosen the condition, or ask for fewer --samples")
+
+
 def unit_points(strategy: str, count: int, axes: int, seed: int) -> list[list[float]]:
     """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``)."""
     rng = random.Random(seed)
@@ -170,8 +206,10 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions) -> Tuple
         raise ResolveError("no value of one dimension resolves: nothing to cover")
     rng = random.Random(options.seed)
     groups = list(itertools.combinations(range(len(sizes)), t))
+    tables = plan.constraints
     uncovered: dict[tuple[int, ...], set[tuple[int, ...]]] = {
-        g: set(itertools.product(*(allowed[a] for a in g))) for g in groups}
+        g: {values for values in itertools.product(*(allowed[a] for a in g))
+            if tables is None or tables.tuple_allowed(g, values)} for g in groups}
     impossible = sum(math.prod(sizes[a] for a in g) for g in groups) - sum(len(u) for u in uncovered.values())
     coverable = sum(len(u) for u in uncovered.values())
     by_axis: dict[int, list[tuple[int, ...]]] = {a: [g for g in groups if a in g] for a in range(len(sizes))}
@@ -188,10 +226,24 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions) -> Tuple
         best_row: list[int] | None = None
         best_gain = -1
         for _ in range(CANDIDATES):
-            row, gain = _candidate(uncovered, groups, allowed, by_axis, rng, len(sizes), pending)
+            row, gain, seed = _candidate(uncovered, groups, allowed, by_axis, rng, len(sizes), pending, tables)
+            if row is None:
+                # No valid row holds this tuple although no condition forbids it alone: it is impossible.
+                group, values = seed
+                uncovered[group].discard(values)
+                remaining -= 1
+                coverable -= 1
+                impossible += 1
+                for a, v in zip(group, values, strict=True):
+                    pending[a][v] -= 1
+                if not remaining:
+                    break
+                continue
             if gain > best_gain:
                 best_row, best_gain = row, gain
-        assert best_row is not None and best_gain > 0
+        if best_row is None:
+            continue
+        assert best_gain > 0
         for g in groups:
             key = tuple(best_row[a] for a in g)
             if key in uncovered[g]:
@@ -206,8 +258,14 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions) -> Tuple
 
 def _candidate(uncovered: dict[tuple[int, ...], set[tuple[int, ...]]], groups: Sequence[tuple[int, ...]],
                allowed: list[list[int]], by_axis: dict[int, list[tuple[int, ...]]], rng: random.Random,
-               axes: int, pending: list[list[int]]) -> tuple[list[int], int]:
-    """One greedy row: seeded by an uncovered tuple, then each other axis (random order) at its best value."""
+               axes: int, pending: list[list[int]], tables: ConstraintTables | None = None,
+               ) -> tuple[list[int] | None, int, tuple[tuple[int, ...], tuple[int, ...]]]:
+    """One greedy row: seeded by an uncovered tuple, then each other axis (random order) at its best value.
+
+    With keep conditions, a value that would break one (given the axes already filled) is never
+    chosen; when some axis has no such value left the row is None (the seed tuple cannot be completed).
+    Returns the row, the tuples it newly covers, and the seed ``(group, values)``.
+    """
     open_groups = [g for g in groups if uncovered[g]]
     group = rng.choice(open_groups)
     # Seed with the open tuple of that group whose values the most open tuples still need.
@@ -223,12 +281,14 @@ def _candidate(uncovered: dict[tuple[int, ...], set[tuple[int, ...]]], groups: S
         # Only groups whose other axes already hold a value can gain from this axis's choice.
         ready = [(g, uncovered[g], g.index(axis)) for g in by_axis[axis]
                  if uncovered[g] and all(a in filled for a in g if a != axis)]
-        best_value, best_score = allowed[axis][0], (-1, -1)
+        best_value, best_score = None, (-1, -1)
         values = list(allowed[axis])
         rng.shuffle(values)
         weights = pending[axis]
         for value in values:
             row[axis] = value
+            if tables is not None and not tables.partial_allowed(row):
+                continue
             gained = 0
             for g, open_tuples, _ in ready:
                 if tuple(row[a] for a in g) in open_tuples:
@@ -236,11 +296,54 @@ def _candidate(uncovered: dict[tuple[int, ...], set[tuple[int, ...]]], groups: S
             score = (gained, weights[value])
             if score > best_score:
                 best_value, best_score = value, score
+        if best_value is None:      # the greedy choices led to a dead end: look for any valid row
+            found = _complete(group, seed_tuple, allowed, tables, axes) if tables is not None else None
+            if found is None:
+                return None, 0, (group, seed_tuple)
+            row = list(found)
+            break
         row[axis] = best_value
         filled.add(axis)
     full = [v if v is not None else 0 for v in row]
+    if tables is not None and tables.violated(full) is not None:
+        found = _complete(group, seed_tuple, allowed, tables, axes)
+        if found is None:
+            return None, 0, (group, seed_tuple)
+        full = found
     gain = sum(1 for g in groups if tuple(full[a] for a in g) in uncovered[g])
-    return full, gain
+    return full, gain, (group, seed_tuple)
+
+
+#: Most partial rows tried when looking for a valid row that holds a given tuple.
+COMPLETION_BUDGET = 100_000
+
+
+def _complete(group: tuple[int, ...], values: tuple[int, ...], allowed: list[list[int]],
+              tables: ConstraintTables, axes: int) -> list[int] | None:
+    """A row holding ``values`` on ``group`` that breaks no keep condition (depth first), or None."""
+    row: list[int | None] = [None] * axes
+    for a, v in zip(group, values, strict=True):
+        row[a] = v
+    if not tables.partial_allowed(row):
+        return None
+    free = [a for a in range(axes) if row[a] is None]
+    budget = [COMPLETION_BUDGET]
+
+    def search(position: int) -> bool:
+        if position == len(free):
+            return tables.violated([v if v is not None else 0 for v in row]) is None
+        axis = free[position]
+        for value in allowed[axis]:
+            budget[0] -= 1
+            if budget[0] < 0:
+                return False
+            row[axis] = value
+            if tables.partial_allowed(row) and search(position + 1):
+                return True
+        row[axis] = None
+        return False
+
+    return [v if v is not None else 0 for v in row] if search(0) else None
 
 
 def _drop_redundant(rows: list[tuple[int, ...]], groups: Sequence[tuple[int, ...]]) -> list[tuple[int, ...]]:

@@ -115,7 +115,6 @@ def run(request: VariationRequest) -> int:
             from coverage_engine.files.parameters import read_parameter_documents
 
             documents = read_parameter_documents(request.parameter_file)
-        plan = build_plan(Path(request.scenario), documents)
         from coverage_engine.variation import strategies
 
         seed = request.seed
@@ -125,17 +124,24 @@ def run(request: VariationRequest) -> int:
             seed = secrets.randbelow(2**31)
             echo(f"seed {seed} (pass --seed {seed} to make the same variants again)")
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
-        strategies.draw_continuous(plan, options)
         covering = request.strategy in strategies.COVERING
         limit = request.max_variants or DEFAULT_MAX_VARIANTS
-        if plan.total > limit and not covering:
-            raise TooManyVariants(
-                f"{plan.total} combinations ({report.slot_sizes(plan)}) are more than --max-variants ({limit}); "
-                "nothing was written", Location(str(plan.path), 0, 0),
-                hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
-                     f"{plan.total} (one .sce file each, about {report.size_text(plan.total * SCE_FILE_BYTES)} "
-                     "on disk)")
-        check_plan(plan)
+        draw = 1                       # a sampler draws more points when keep conditions reject some
+        while True:
+            plan = build_plan(Path(request.scenario), documents)
+            strategies.draw_continuous(plan, strategies.oversampled(options, draw))
+            wanted = plan.total if draw == 1 else options.samples or 0
+            if wanted > limit and not covering:
+                raise TooManyVariants(
+                    f"{wanted} combinations ({report.slot_sizes(plan)}) are more than --max-variants ({limit}); "
+                    "nothing was written", Location(str(plan.path), 0, 0),
+                    hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
+                         f"{wanted} (one .sce file each, about {report.size_text(wanted * SCE_FILE_BYTES)} "
+                         "on disk)")
+            check_plan(plan, exclude=not covering)
+            if strategies.enough_samples(plan, options, draw):
+                break
+            draw *= 2
         tuples = strategies.build_covering_array(plan, options) if covering else None
         report.describe(plan)
         if request.strategy != "full":
@@ -179,7 +185,8 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
     text = f"strategy {request.strategy}: {plan.total} variant(s) over {len(plan.sizes)} dimension(s)"
     if tuples is not None:
         text += (f"; {tuples.covered} of {tuples.coverable} coverable {tuples.strength}-tuples covered"
-                 + (f" ({tuples.impossible} impossible: they hold a value that does not resolve)"
+                 + (f" ({tuples.impossible} impossible: they hold a value that does not resolve"
+                    + (", or break a keep condition)" if plan.constraints is not None else ")")
                     if tuples.impossible else ""))
     return text
 

@@ -7,6 +7,7 @@ Messages go to stdout, problems to stderr, both plain text. Only the progress of
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from typing import TYPE_CHECKING
@@ -82,11 +83,25 @@ def describe(plan: VariationPlan) -> None:
         echo(f"{dim.location}: {dim.key}: {len(dim.choices)} values [{values}]{joint}")
     if plan.documents is not None:
         echo(f"parameter file: {len(plan.documents)} documents")
-    if plan.rows is not None:
-        echo(f"{plan.total} variants chosen from {slot_sizes(plan)} values, {plan.resolutions} resolutions to "
-             "check the values")
+    if plan.constraints is not None:
+        keys = plan.keys
+        for condition in plan.constraints.conditions:
+            names = ", ".join(keys[a] for a in condition.axes) or "no varied parameter"
+            if condition.per_row:
+                ruled = f"{plan.excluded_by.get(condition.text, 0)} drawn variant(s) break it"
+            else:
+                table = math.prod(plan.sizes[a] for a in condition.axes)
+                ruled = f"rules out {len(condition.forbidden)} of {table} value combination(s) of {names}"
+            echo(f"{condition.location}: condition {condition.text}: {ruled} (never written)")
+    product = math.prod(plan.sizes)
+    if plan.rows is not None and not (plan.excluded and plan.total + plan.excluded == product):
+        excluded = f" ({plan.excluded} drawn broke a keep condition)" if plan.excluded else ""
+        echo(f"{plan.total} variants chosen from {slot_sizes(plan)} values{excluded}, {plan.resolutions} "
+             "resolutions to check the values")
         return
-    echo(f"{plan.total} combinations ({slot_sizes(plan)}), {plan.resolutions} resolutions to check the values")
+    excluded = f"; {plan.excluded} break a keep condition" if plan.excluded else ""
+    echo(f"{plan.total} combinations ({slot_sizes(plan)}{excluded}), {plan.resolutions} resolutions to check "
+         "the values")
 
 
 def report_rejections(plan: VariationPlan) -> None:

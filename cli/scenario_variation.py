@@ -48,10 +48,13 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
                    "when left out.")
 @click.option("--wait", is_flag=True,
               help="When another run writes into the output folder, wait for it instead of stopping.")
+@click.option("--only-new", is_flag=True,
+              help="Add to earlier runs of the same file in the output folder: write only variants the store does "
+                   "not hold yet (a sampler continues its draw, a covering array its rows).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())
 @click.pass_context
 def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
-            strategy, strength, samples, seed, wait):
+            strategy, strength, samples, seed, wait, only_new):
     """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
     folder: its .osc files).
 
@@ -67,7 +70,7 @@ def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, 
         request = VariationRequest(
             scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
             log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
-            strength=strength, samples=samples, seed=seed, wait=wait)
+            strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new)
         if len(files) == 1:
             return run(request)
         try:                     # several files: each is done on its own; one that fails stops only itself

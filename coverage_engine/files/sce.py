@@ -196,7 +196,7 @@ class SceTemplate:
     def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
                  chunks: list[str], replacements: list[list[str]], keys: list[str],
                  shown: list[list[str]], stored: list[list[object]],
-                 documents: Sequence[Mapping[str, object]] | None = None) -> None:
+                 documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None) -> None:
         model = "".join(chunks)
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
             _BLOCK_UNSAFE.search(r) is None and "\n" not in r for slot in replacements for r in slot)
@@ -207,7 +207,7 @@ class SceTemplate:
             self._chunks = list(chunks)
         self._replacements = replacements
         self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
-        self._of = f" of {_one_line(Path(source).name)}\n"
+        self._of = f" of {_one_line(Path(source).name)}\n" + (f"# {_one_line(note)}\n" if note else "")
         self._head = (
             f"format_version: {SCE_FORMAT_VERSION}\n"
             f"source: {_quote(source)}\n"

@@ -49,7 +49,7 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         source=plan.path.name, source_sha256=source_sha256(plan.text),
         source_dir=relative_source_dir(plan.path.parent, output_dir), scenario=plan.scenario,
         chunks=list(plan.template.chunks), replacements=[list(r) for r in plan.template.replacements],
-        keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents)
+        keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note)
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,7 +67,8 @@ class OutputSurvey:
     foreign: list[Path]
 
 
-def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, count: int) -> OutputSurvey:
+def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, count: int,
+                  first: int = 0) -> OutputSurvey:
     """Sort the entries of ``output_dir`` named like variants of ``source`` (each file's head read once)."""
     folder = Path(output_dir)
     if not folder.is_dir():
@@ -79,7 +80,8 @@ def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, coun
         ours = not path.is_symlink() and path.is_file() and written_from(path, source)
         if ours:
             earlier.append(path)
-        elif int(path.name[start:end]) < count and str(int(path.name[start:end])) == path.name[start:end]:
+        elif first <= int(path.name[start:end]) < first + count \
+                and str(int(path.name[start:end])) == path.name[start:end]:
             foreign.append(path)
     return OutputSurvey(earlier, foreign)
 
@@ -160,6 +162,8 @@ class GenerationResult:
     written: int
     skipped: int
     stopped: bool
+    #: Combinations passed over because an earlier run wrote them (``--only-new``).
+    held: int = 0
 
 
 class VariantWriteError(Exception):
@@ -185,7 +189,8 @@ class _Batch:
 def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Container[str] = (), *,
              record: Callable[[list[Generated]], None] | None = None,
              on_item: Callable[[Generated], None] | None = None,
-             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE) -> GenerationResult:
+             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE,
+             held: Container[str] = frozenset(), first_index: int = 0) -> GenerationResult:
     """Write every valid combination of ``plan`` to ``output_dir``, in batches.
 
     For each batch of up to ``batch_size`` valid variants, their files are written (each whole, under
@@ -203,6 +208,10 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     stored content hash always matches the file. A file named in ``existing`` (names of the earlier
     generation) that already holds exactly the new text is left untouched: regenerating the same input
     rewrites nothing (truncating files is slow on some file systems, and mtimes stay meaningful).
+
+    ``held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
+    combination is passed over (counted in ``held_count``), and the others are numbered from
+    ``first_index`` on without gaps.
     """
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
@@ -210,8 +219,9 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     prefix = str(folder.resolve() / plan.path.stem)
     fragments = _assignment_fragments(plan)
     sha256 = hashlib.sha256
-    written = skipped = 0
+    written = skipped = passed_over = 0
     stopped = False
+    renumber = bool(held) or first_index > 0
     batch: list[Generated] = []
     unrecorded: list[_Batch] = []
     writer = FileWriter(background=plan.total >= BACKGROUND_FROM)
@@ -246,11 +256,16 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
                 if on_item is not None:
                     on_item(Generated(index, choices, None, None, None, None, rejection))
                 continue
+            assignment = _assignment(fragments, choices)
+            if renumber:
+                if assignment in held:
+                    passed_over += 1
+                    continue
+                index = first_index + written + len(batch) + sum(len(b.items) for b in unrecorded)
             text = template.render(index, choices)
             data = text.encode("utf-8")
             path = f"{prefix}{index}{SUFFIX}"
-            batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(),
-                                   _assignment(fragments, choices), None))
+            batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
             if not (existing and os.path.basename(path) in existing and _same_content(path, data)):
                 writer.write(path, data)
             if len(batch) >= batch_size:
@@ -270,7 +285,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
         raise VariantWriteError(exc, written) from exc
     finally:
         _end(writer)
-    return GenerationResult(written, skipped, stopped)
+    return GenerationResult(written, skipped, stopped, passed_over)
 
 
 def _end(writer: FileWriter) -> None:

@@ -115,6 +115,8 @@ class VariationPlan:
     excluded: int = 0
     #: Per condition text, how many combinations it left out.
     excluded_by: dict[str, int] = field(default_factory=dict)
+    #: How the variants were chosen (``strategy lhs, samples 200, seed 7``), written in each ``.sce`` header.
+    strategy_note: str | None = None
 
     # -- axes ---------------------------------------------------------------------------------------
 

@@ -24,9 +24,10 @@ becomes a choice of its dimension, so it is checked like a listed one), covering
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
 from coverage_engine.errors import OscError, ResolveError
@@ -54,6 +55,9 @@ class StrategyOptions:
     strength: int = 2
     samples: int | None = None
     seed: int = 0
+    #: ``lhs`` continued by ``--only-new``: the sizes of the Latin hypercubes drawn one after the other
+    #: (the first with ``seed``, each next one with a seed derived from it); empty: one hypercube.
+    blocks: tuple[int, ...] = ()
 
     @property
     def t(self) -> int:
@@ -81,7 +85,7 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     if options.samples is None:
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
     sizes = plan.sizes                     # choices per axis: the dimensions, then the documents if any
-    points = unit_points(options.strategy, options.samples, len(sizes), options.seed)
+    points = unit_points(options.strategy, options.samples, len(sizes), options.seed, options.blocks)
     dimensions: list[Dimension] = list(plan.dimensions)
     rows = [[0] * len(sizes) for _ in points]
     for axis, size in enumerate(sizes):
@@ -100,6 +104,60 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     plan.slots = _slots(dimensions, plan.documents)
     plan._bad = [set() for _ in plan.slots]
     plan.rows = [tuple(r) for r in rows]
+
+
+def continued(options: StrategyOptions, runs: Sequence[dict]) -> StrategyOptions:
+    """``--only-new``: the options that continue the earlier runs' draw instead of restarting it.
+
+    ``random``, ``halton`` and ``sobol`` continue by themselves (their first N points do not depend
+    on how many are drawn, so the points already written are found in the store and passed over). A
+    Latin hypercube of 400 points shares nothing with one of 200, so an ``lhs`` run after one with
+    the same seed draws the earlier hypercube(s) again and a new one for the samples added.
+    """
+    if options.strategy != "lhs" or options.samples is None:
+        return options
+    earlier = [r for r in runs if r.get("strategy") == "lhs" and r.get("seed") == options.seed
+               and isinstance(r.get("samples"), int)]
+    if not earlier:
+        return options
+    last = earlier[-1]
+    blocks = tuple(int(b) for b in last.get("blocks") or [last["samples"]])
+    if options.samples > sum(blocks):
+        blocks += (options.samples - sum(blocks),)
+    return replace(options, blocks=blocks)
+
+
+def rows_of(plan: VariationPlan, assignments: Iterable[str]) -> list[tuple[int, ...]]:
+    """The rows (choice per axis) of stored assignments that this plan can express (others are left out)."""
+    lookup = [{json.dumps(value): i for i, value in enumerate(values)} for values in plan.stored()]
+    keys = plan.keys
+    rows = []
+    for text in assignments:
+        try:
+            assignment = json.loads(text)
+        except ValueError:
+            continue
+        row = []
+        for key, table in zip(keys, lookup, strict=True):
+            choice = table.get(json.dumps(assignment.get(key))) if key in assignment else None
+            if choice is None:
+                break
+            row.append(choice)
+        else:
+            rows.append(tuple(row))
+    return sorted(rows)
+
+
+def describe_options(options: StrategyOptions) -> str | None:
+    """``strategy lhs, samples 200, seed 7`` (None for the full product, which needs no seed)."""
+    if options.strategy == "full":
+        return None
+    parts = [f"strategy {options.strategy}"]
+    if options.strategy in COVERING:
+        parts.append(f"strength {options.t}")
+    if options.strategy in SAMPLERS:
+        parts.append(f"samples {options.samples}")
+    return ", ".join([*parts, f"seed {options.seed}"])
 
 
 #: A sampler whose draws keep conditions reject draws up to this many times the samples asked for.
@@ -137,8 +195,19 @@ def enough_samples(plan: VariationPlan, options: StrategyOptions, factor: int) -
         hint="widen the ranges, loosen the condition, or ask for fewer --samples")
 
 
-def unit_points(strategy: str, count: int, axes: int, seed: int) -> list[list[float]]:
-    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``)."""
+def unit_points(strategy: str, count: int, axes: int, seed: int,
+                blocks: Sequence[int] = ()) -> list[list[float]]:
+    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``).
+
+    ``blocks`` (``lhs`` only): Latin hypercubes of these sizes one after the other (see :func:`continued`).
+    """
+    if strategy == "lhs" and blocks:
+        points: list[list[float]] = []
+        for number, size in enumerate(blocks):
+            points += unit_points("lhs", size, axes, seed if number == 0 else (seed * 1_000_003 + number) % 2**63)
+        if len(points) < count:
+            points += unit_points("lhs", count - len(points), axes, (seed * 1_000_003 + len(blocks)) % 2**63)
+        return points[:count]
     rng = random.Random(seed)
     if strategy == "random":
         return [[rng.random() for _ in range(axes)] for _ in range(count)]
@@ -192,8 +261,14 @@ class TupleCoverage:
     impossible: int
 
 
-def build_covering_array(plan: VariationPlan, options: StrategyOptions) -> TupleCoverage:
-    """After the values are checked: choose rows covering every coverable t-tuple; sets ``plan.rows``."""
+def build_covering_array(plan: VariationPlan, options: StrategyOptions,
+                         seeds: Sequence[tuple[int, ...]] = ()) -> TupleCoverage:
+    """After the values are checked: choose rows covering every coverable t-tuple; sets ``plan.rows``.
+
+    ``seeds`` are rows written before (``--only-new``): the tuples they cover count as covered, and
+    only the rows still needed are chosen (a ``t-way --strength 3`` run after a pairwise one adds
+    rows for the triples the pairwise rows miss).
+    """
     sizes = plan.sizes
     t = options.t
     if t < 2:
@@ -222,6 +297,14 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions) -> Tuple
                 pending[a][v] += 1
     rows: list[tuple[int, ...]] = []
     remaining = coverable
+    for seed_row in seeds:
+        for g in groups:
+            key = tuple(seed_row[a] for a in g)
+            if key in uncovered[g]:
+                uncovered[g].discard(key)
+                remaining -= 1
+                for a, v in zip(g, key, strict=True):
+                    pending[a][v] -= 1
     while remaining:
         best_row: list[int] | None = None
         best_gain = -1

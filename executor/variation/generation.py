@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from coverage_engine.variation.output import Generated
     from coverage_engine.variation.plan import Resolve, VariationPlan
     from coverage_engine.variation.strategies import TupleCoverage
+    from store.variant_history import HeldVariants
 
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
 DEFAULT_MAX_VARIANTS = 10_000_000
@@ -91,13 +92,14 @@ class VariationRequest:
     samples: int | None = None
     seed: int | None = None
     wait: bool = False
+    only_new: bool = False
 
     def recorded_options(self, source: Path, seed: int | None = None) -> dict[str, object]:
         """The options kept with the run in the store, under the command line's names."""
         return {"output_dir": self.output_dir, "debug": self.debug, "log_model": self.log_model,
                 "list": self.list_only, "scenario_parameter_file": self.parameter_file,
                 "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
-                "strength": self.strength, "samples": self.samples, "seed": seed}
+                "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new}
 
 
 def run(request: VariationRequest) -> int:
@@ -126,9 +128,12 @@ def run(request: VariationRequest) -> int:
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
         covering = request.strategy in strategies.COVERING
         limit = request.max_variants or DEFAULT_MAX_VARIANTS
+        held = _held(request) if request.only_new else None
         draw = 1                       # a sampler draws more points when keep conditions reject some
         while True:
             plan = build_plan(Path(request.scenario), documents)
+            if held is not None and draw == 1:
+                options = strategies.continued(options, held.runs)
             strategies.draw_continuous(plan, strategies.oversampled(options, draw))
             wanted = plan.total if draw == 1 else options.samples or 0
             if wanted > limit and not covering:
@@ -142,7 +147,9 @@ def run(request: VariationRequest) -> int:
             if strategies.enough_samples(plan, options, draw):
                 break
             draw *= 2
-        tuples = strategies.build_covering_array(plan, options) if covering else None
+        seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
+        tuples = strategies.build_covering_array(plan, options, seeds) if covering else None
+        plan.strategy_note = strategies.describe_options(options)
         report.describe(plan)
         if request.strategy != "full":
             echo(_strategy_summary(plan, request, tuples))
@@ -165,7 +172,7 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
-            return _write(plan, request, _open_store(request.store), seed)
+            return _write(plan, request, _open_store(request.store), seed, held, options.blocks)
 
 
 def _open_store(url: str | None) -> Engine:
@@ -191,7 +198,28 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
     return text
 
 
-def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None) -> int:
+def _held(request: VariationRequest) -> HeldVariants:
+    """``--only-new``: what earlier runs of this source wrote into the output folder (per the store)."""
+    from coverage_engine.variation.output import source_sha256
+    from store.database import StoreError
+    from store.variant_history import held_variants
+
+    path = Path(request.scenario)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        from store.variant_history import HeldVariants
+
+        return HeldVariants(frozenset(), 0, ())       # build_plan says what is wrong with the file
+    try:
+        return held_variants(_open_store(request.store), source_path=str(path.resolve()),
+                             source_sha256=source_sha256(text), output_dir=str(Path(request.output_dir).resolve()))
+    except StoreError as exc:
+        raise VariationStoreError(f"{exc} (nothing was written)") from exc
+
+
+def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None,
+           held: HeldVariants | None = None, blocks: tuple[int, ...] = ()) -> int:
     from coverage_engine.variation.output import (
         VariantWriteError,
         generate,
@@ -214,7 +242,8 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             Location(str(plan.path), 0, 0), hint="give the .osc file a shorter name")
     # Only what an earlier generation of the same source wrote is replaced; a file of the same name that
     # it did not write (hand-written, another tool's, a symbolic link) stops the run before anything is written.
-    survey = survey_output(output_dir, plan.path, plan.total)
+    first = held.next_index if held is not None else 0
+    survey = survey_output(output_dir, plan.path, plan.total, first)
     foreign = survey.foreign
     if foreign:
         shown = ", ".join(printable(p.name) for p in foreign[:3]) + (f" and {len(foreign) - 3} more"
@@ -225,9 +254,14 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             Location(str(plan.path), 0, 0),
             hint="move those files away, or write the variants to another folder with -o")
     old = {p.name: p for p in survey.earlier}
-    if old:
+    if held is not None:            # --only-new adds to the earlier runs' files; it replaces none of them
+        if old:
+            echo(f"keeping {len(old)} .sce file(s) of earlier runs in {output_dir}/; the variants they hold are "
+                 "not written again")
+        ours, old = set(old), {}
+    elif old:
         echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
-    others = _other_sce_files(output_dir, set(old))
+    others = _other_sce_files(output_dir, set(old) if held is None else ours)
     if others:
         echo(f"leaving {others} other .sce file(s) in {output_dir}/ untouched (not variants of {plan.path.name})")
     debug, verbose = request.debug, plan.total <= LIST_FILES_UP_TO
@@ -236,7 +270,8 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     try:
         recorder = VariationRecorder(
             engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
-            source_text=plan.text, options=request.recorded_options(plan.path, seed),
+            source_text=plan.text, options={**request.recorded_options(plan.path, seed),
+                                            **({"blocks": list(blocks)} if blocks else {})},
             output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())
     except StoreError as exc:
         raise VariationStoreError(f"{exc} (nothing was written)") from exc
@@ -269,7 +304,8 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
         with _StopRequest() as stop:
             try:
                 result = generate(plan, output_dir, existing=frozenset(old), record=record, on_item=on_item,
-                                  stop=stop)
+                                  stop=stop, held=held.assignments if held is not None else frozenset(),
+                                  first_index=first)
             except VariantWriteError as exc:
                 recorder.finish(complete=False)
                 cause = exc.cause
@@ -279,7 +315,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
                     f"written (and recorded) before it stopped" + (f"; {kept}" if old else ""), Location(str(plan.path), 0, 0),
                     hint="make room (or write to another folder with -o) and run again: the files written "
                          "now are replaced") from None
-            recorder.finish(complete=not result.stopped)
+            recorder.finish(complete=not result.stopped and held is None)
     except StoreError as exc:
         raise VariationStoreError(f"{exc} (the .sce files recorded so far are in {output_dir}/; "
                                   f"{kept})") from exc
@@ -296,6 +332,9 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     if skipped > LIST_SKIPPED_UP_TO and not debug:
         echo(f"... {skipped - LIST_SKIPPED_UP_TO} more skipped variants (-d lists all)", err=True)
     summary = f"wrote {result.written} scenario file(s) to {output_dir}/"
+    if held is not None:
+        summary = (f"wrote {result.written} new scenario file(s) to {output_dir}/; {result.held} variant(s) "
+                   "earlier runs wrote were not written again")
     if skipped:
         summary += f"; {skipped} combination(s) skipped because they do not resolve"
     echo(summary)

@@ -160,3 +160,16 @@ def test_sobol_points_come_from_scipy(tmp_path):
     assert len(rows) == 8 and all(10 <= float(r["v"]) <= 30 for r in rows)
     # a scrambled Sobol set of 8 points puts one point in each eighth of each axis
     assert sorted(int((float(r["g"]) - 0.5) / 2 * 8) for r in rows) == list(range(8))
+
+
+def test_foretify_unit_after_the_bracket_is_the_same_range(tmp_path):
+    (tmp_path / "a.osc").write_text(CONTINUOUS)
+    (tmp_path / "b.osc").write_text(CONTINUOUS.replace("[10kph..30kph]", "[10..30]kph"))
+    for name in ("a", "b"):
+        done = vary(tmp_path, f"{name}.osc", "--strategy", "lhs", "--samples", "5", "--seed", "8", "-o", name)
+        assert done.returncode == 0, done.stderr
+        assert "r.v: range [10.0kph..30.0kph]" in done.stdout
+    assert assignments(tmp_path / "a") == assignments(tmp_path / "b")
+    (tmp_path / "c.osc").write_text(CONTINUOUS.replace("[10kph..30kph]", "[10..x]kph"))
+    refused = vary(tmp_path, "c.osc", "--strategy", "lhs", "--samples", "5")
+    assert refused.returncode == 1 and "a range end must be a number" in refused.stderr

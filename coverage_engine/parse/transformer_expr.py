@@ -286,6 +286,12 @@ class BehaviorExpressionRules:
     def range_expr(self, children):
         return s.RangeExpr(children[1], children[3], self.loc(children))
 
+    def range_expr_unit(self, children):
+        """Foretify's ``[10..50]kph``: the unit after the bracket applies to both (plain number) ends."""
+        unit = self.name(children[5])
+        ends = [_with_unit(end, unit) for end in (children[1], children[3])]
+        return s.RangeExpr(ends[0], ends[1], self.loc(children))
+
     def enum_ref(self, children):
         return s.EnumValueRef(self.name(children[0]), self.name(children[2]), self.loc(children))
 
@@ -294,3 +300,16 @@ class BehaviorExpressionRules:
 
     def event_ref(self, children):
         return s.EventRef((self.name(children[1]),), self.loc(children))
+
+
+def _with_unit(end: s.Expression, unit: str) -> s.Expression:
+    """A range end ``10`` or ``-2.5`` of ``[10..50]kph`` as the physical literal ``10kph``; anything else
+    stays as written (the range's user says that a range end must be a plain number)."""
+    sign = 1
+    number = end
+    if isinstance(number, s.UnaryOp) and number.op in ("-", "+"):
+        sign = -1 if number.op == "-" else 1
+        number = number.operand
+    if isinstance(number, s.Literal) and number.kind in ("int", "float") and not isinstance(number.value, bool):
+        return s.PhysicalLiteral(sign * number.value, unit, end.location)  # type: ignore[operator]
+    return end

@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
+from coverage_engine.lazy import per_choice
 from coverage_engine.location import Location
 
 #: The format version this release writes.
@@ -194,8 +195,8 @@ class SceTemplate:
     """
 
     def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
-                 chunks: list[str], replacements: list[list[str]], keys: list[str],
-                 shown: list[list[str]], stored: list[list[object]],
+                 chunks: list[str], replacements: Sequence[Sequence[str]], keys: list[str],
+                 shown: Sequence[Sequence[str]], stored: Sequence[Sequence[object]],
                  documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None) -> None:
         model = "".join(chunks)
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
@@ -216,9 +217,8 @@ class SceTemplate:
             f"scenario: {_quote(scenario)}\n"
             "index: "
         )
-        self._comments = [[f"# {_one_line(key)} = {_one_line(text)}\n" for text in texts] for key, texts in zip(keys, shown, strict=True)]
-        self._entries = [[f"  {_quote(key)}: {_quote(value)}\n" for value in values]
-                         for key, values in zip(keys, stored, strict=True)]
+        self._comments = [_comments(key, texts) for key, texts in zip(keys, shown, strict=True)]
+        self._entries = [_entries(key, values) for key, values in zip(keys, stored, strict=True)]
         self._documents = None if documents is None else [f"parameters: {_quote(d)}\n" for d in documents]
         self.text_dimensions = len(replacements)
 
@@ -253,7 +253,19 @@ class SceTemplate:
 _END_LINE = SCE_END + "\n"
 
 
-def _join(chunks: list[str], replacements: list[list[str]], choices) -> str:
+def _comments(key: str, texts: Sequence[str]) -> Sequence[str]:
+    """The header comment line of each choice of one dimension (``# key = value``)."""
+    head = f"# {_one_line(key)} = "
+    return per_choice(texts, lambda text: f"{head}{_one_line(text)}\n")
+
+
+def _entries(key: str, values: Sequence[object]) -> Sequence[str]:
+    """The assignment line of each choice of one dimension (``  "key": value``)."""
+    head = f"  {_quote(key)}: "
+    return per_choice(values, lambda value: f"{head}{_quote(value)}\n")
+
+
+def _join(chunks: list[str], replacements: Sequence[Sequence[str]], choices) -> str:
     if not replacements:
         return chunks[0]
     parts = [chunks[0]]

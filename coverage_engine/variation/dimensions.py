@@ -24,7 +24,7 @@ the cartesian product it varies slowest.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -73,7 +73,7 @@ class Dimension:
     scenario: str
     target: tuple
     left: str
-    choices: tuple[Choice, ...]
+    choices: Sequence[Choice]
     start: int
     end: int
     location: Location

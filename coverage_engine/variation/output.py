@@ -13,11 +13,12 @@ import hashlib
 import json
 import os
 import re
-from collections.abc import Callable, Container
+from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.files.sce import SceTemplate, is_sce_text, relative_source_dir
+from coverage_engine.lazy import per_choice
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
 
@@ -48,7 +49,7 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
     return SceTemplate(
         source=plan.path.name, source_sha256=source_sha256(plan.text),
         source_dir=relative_source_dir(plan.path.parent, output_dir), scenario=plan.scenario,
-        chunks=list(plan.template.chunks), replacements=[list(r) for r in plan.template.replacements],
+        chunks=list(plan.template.chunks), replacements=list(plan.template.replacements),
         keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note)
 
 
@@ -135,10 +136,13 @@ def remove_files(paths: list[Path]) -> int:
     return removed
 
 
-def _assignment_fragments(plan: VariationPlan) -> list[list[str]]:
+def _assignment_fragments(plan: VariationPlan) -> list[Sequence[str]]:
     """Per axis and choice, ``"key": value`` as it appears in the stored assignment JSON."""
-    return [[f"{json.dumps(key, ensure_ascii=False)}: {json.dumps(value, ensure_ascii=False)}" for value in values]
-            for key, values in zip(plan.keys, plan.stored(), strict=True)]
+    def fragments(key: str, values: Sequence[object]) -> Sequence[str]:
+        prefix = f"{json.dumps(key, ensure_ascii=False)}: "
+        return per_choice(values, lambda value: prefix + json.dumps(value, ensure_ascii=False))
+
+    return [fragments(key, values) for key, values in zip(plan.keys, plan.stored(), strict=True)]
 
 
 def _same_content(path: str, data: bytes) -> bool:
@@ -266,8 +270,9 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
             data = text.encode("utf-8")
             path = f"{prefix}{index}{SUFFIX}"
             batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
-            if not (existing and os.path.basename(path) in existing and _same_content(path, data)):
-                writer.write(path, data)
+            earlier = bool(existing) and os.path.basename(path) in existing
+            if not (earlier and _same_content(path, data)):
+                writer.write(path, data, replace=earlier)
             if len(batch) >= batch_size:
                 send()
         send()
@@ -296,5 +301,5 @@ def _end(writer: FileWriter) -> None:
         pass
 
 
-def _assignment(fragments: list[list[str]], choices: tuple[int, ...]) -> str:
+def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...]) -> str:
     return "{" + ", ".join(f[c] for f, c in zip(fragments, choices, strict=True)) + "}"

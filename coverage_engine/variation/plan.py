@@ -40,6 +40,7 @@ from coverage_engine.variation.conditions import (
     find_conditions,
 )
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
+from coverage_engine.variation.drawn import DrawnChoices
 from coverage_engine.variation.template import TextTemplate
 
 if TYPE_CHECKING:
@@ -135,16 +136,18 @@ class VariationPlan:
             keys.append(DOCUMENT_KEY)
         return keys
 
-    def shown(self) -> list[list[str]]:
+    def shown(self) -> list[Sequence[str]]:
         """Per axis, each choice as shown in headers (source text; document number)."""
-        shown = [[c.text for c in d.choices] for d in self.dimensions]
+        shown: list[Sequence[str]] = [d.choices.texts if isinstance(d.choices, DrawnChoices)
+                                      else [c.text for c in d.choices] for d in self.dimensions]
         if self.documents is not None:
             shown.append([str(i) for i in range(len(self.documents))])
         return shown
 
-    def stored(self) -> list[list[object]]:
+    def stored(self) -> list[Sequence[object]]:
         """Per axis, each choice as stored in assignments."""
-        stored = [[c.stored for c in d.choices] for d in self.dimensions]
+        stored: list[Sequence[object]] = [d.choices.values if isinstance(d.choices, DrawnChoices)
+                                          else [c.stored for c in d.choices] for d in self.dimensions]
         if self.documents is not None:
             stored.append(list(range(len(self.documents))))
         return stored
@@ -377,7 +380,8 @@ def _options_to_check(plan: VariationPlan, slot: Slot) -> Sequence[int]:
     if len(slot.dims) == 1 and slot.dims[0] < len(plan.dimensions):
         dim = plan.dimensions[slot.dims[0]]
         if dim.continuous is not None and dim.choices:
-            values = [c.stored for c in dim.choices]
+            values = list(dim.choices.values) if isinstance(dim.choices, DrawnChoices) else \
+                [c.stored for c in dim.choices]
             return sorted({values.index(min(values)), values.index(max(values))})  # type: ignore[type-var]
     return range(slot.count)
 

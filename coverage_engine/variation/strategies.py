@@ -27,12 +27,14 @@ import itertools
 import json
 import math
 import random
+from array import array
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
 from coverage_engine.errors import OscError, ResolveError
 from coverage_engine.variation.conditions import ConstraintTables
-from coverage_engine.variation.dimensions import Choice, Dimension
+from coverage_engine.variation.dimensions import Dimension
+from coverage_engine.variation.drawn import DrawnChoices
 from coverage_engine.variation.plan import VariationPlan, _slots
 from coverage_engine.variation.template import TextTemplate
 
@@ -91,9 +93,8 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     for axis, size in enumerate(sizes):
         spec = dimensions[axis].continuous if axis < len(dimensions) else None
         if spec is not None:                # each point draws its own value: row i takes choice i
-            values = [spec.low + p[axis] * (spec.high - spec.low) for p in points]
-            dimensions[axis] = replace(dimensions[axis],
-                                       choices=tuple(Choice(spec.text(v), v, spec.location) for v in values))
+            values = array("d", (spec.low + p[axis] * (spec.high - spec.low) for p in points))
+            dimensions[axis] = replace(dimensions[axis], choices=DrawnChoices(values, spec))
             for i, row in enumerate(rows):
                 row[axis] = i
         else:                               # a discrete axis: the coordinate picks one of its values

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from coverage_engine.lazy import per_choice
 from coverage_engine.variation.dimensions import Dimension
 
 
@@ -23,7 +24,7 @@ class TextTemplate:
     """``chunks`` (one more than dimensions) and, per dimension, the replacement text of each choice."""
 
     chunks: tuple[str, ...]
-    replacements: tuple[tuple[str, ...], ...]
+    replacements: tuple[Sequence[str], ...]
 
     @classmethod
     def build(cls, text: str, dimensions: Sequence[Dimension]) -> TextTemplate:
@@ -43,7 +44,7 @@ class TextTemplate:
         tail = text[position:].rstrip("\n") + "\n"
         tail, owed = _give_back(tail, owed)
         chunks.append(tail + "\n" * owed)
-        replacements = tuple(tuple(dim.replacement(i) for i in range(len(dim.choices))) for dim in dimensions)
+        replacements = tuple(per_choice(range(len(dim.choices)), dim.replacement) for dim in dimensions)
         return cls(tuple(chunks), replacements)
 
     def render(self, choices: Sequence[int]) -> str:

@@ -6,9 +6,12 @@ Creating a file costs tens of microseconds of kernel time on common file systems
 large generations a forked child does the ``open``/``write``/``rename`` calls while the parent renders
 the next texts and fills the store: the two run on different cores.
 
-Every file is written under a temporary name beside it (``.<name>.part``, created without following
-links) and renamed over the final name, so a full disk, a kill or a planted symbolic link never leaves
-a cut-short file under a variant's name nor writes through a link. :meth:`FileWriter.checkpoint` and
+A file that replaces another (an earlier generation's) is written under a temporary name beside it
+(``.<name>.part``, created without following links) and renamed over the final name, so a full disk or
+a kill leaves the old file whole. A new file is created exclusively under its own name (``O_EXCL``,
+never through a link) and removed again if it cannot be written whole: one metadata operation instead
+of two, which is most of the cost of 100,000 small files. Either way no cut-short file is left under a
+variant's name after an error, and nothing is written through a planted symbolic link. :meth:`FileWriter.checkpoint` and
 :meth:`FileWriter.wait` let the caller learn when everything written before a checkpoint is on disk,
 so it records files only once they exist.
 
@@ -28,9 +31,11 @@ import signal
 import struct
 import sys
 
-_HEADER = struct.Struct("!II")
+_HEADER = struct.Struct("!IIB")     # path length, data length, 1 = replaces an existing file
 #: ``O_NOFOLLOW``: a symbolic link planted under a temporary name is never written through.
 _FLAGS = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0) | getattr(os, "O_NOFOLLOW", 0)
+#: A new file: created here, never opened if anything (a link included) is already there.
+_NEW_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0) | getattr(os, "O_NOFOLLOW", 0)
 _BATCH = 1 << 20
 #: Suffix of the temporary name a file is written under before it is renamed to its own.
 PART_SUFFIX = ".part"
@@ -42,12 +47,31 @@ def temporary_name(path: str) -> str:
     return os.path.join(head, f".{tail}{PART_SUFFIX}")
 
 
-def write_file(path: str, data: bytes) -> None:
+def write_file(path: str, data: bytes, replace: bool = True) -> None:
     """Make ``path`` hold ``data``, all of it or (on any error) none of it; raises :class:`OSError`.
 
-    The data goes to a temporary name first, which is renamed over ``path``: a link at ``path`` is
-    replaced, not followed, and a failure leaves whatever was at ``path`` before.
+    ``replace``: the data goes to a temporary name first, which is renamed over ``path`` (a link at
+    ``path`` is replaced, not followed; a failure leaves whatever was at ``path`` before). Otherwise
+    ``path`` must not exist yet: it is created exclusively, and removed again on a failure (should
+    something have appeared there meanwhile, the replacing way is taken).
     """
+    if not replace:
+        try:
+            fd = os.open(path, _NEW_FLAGS, 0o644)
+        except FileExistsError:
+            return write_file(path, data, replace=True)
+        try:
+            _write_all(fd, data)
+        except OSError as exc:
+            os.close(fd)
+            os.unlink(path)
+            raise OSError(exc.errno, exc.strerror, path) from None
+        try:
+            os.close(fd)
+        except OSError as exc:
+            os.unlink(path)
+            raise OSError(exc.errno, exc.strerror, path) from None
+        return
     part = temporary_name(path)
     try:
         fd = os.open(part, _FLAGS, 0o644)
@@ -112,13 +136,15 @@ class FileWriter:
         os.close(ack_write)
         self._pid, self._acks = pid, ack_read
 
-    def write(self, path: str, data: bytes) -> None:
-        """Write ``data`` to ``path`` (now, or in the child soon); raises :class:`OSError` when it cannot."""
+    def write(self, path: str, data: bytes, replace: bool = True) -> None:
+        """Write ``data`` to ``path`` (now, or in the child soon); raises :class:`OSError` when it cannot.
+
+        ``replace`` False promises that nothing is at ``path`` yet (see :func:`write_file`)."""
         if not self._pid:
-            write_file(path, data)
+            write_file(path, data, replace)
             return
         encoded = path.encode("utf-8", "surrogateescape")
-        self._pending += [_HEADER.pack(len(encoded), len(data)), encoded, data]
+        self._pending += [_HEADER.pack(len(encoded), len(data), int(replace)), encoded, data]
         self._size += len(encoded) + len(data) + _HEADER.size
         if self._size >= _BATCH:
             self._flush()
@@ -127,7 +153,7 @@ class FileWriter:
         """Mark everything written so far; :meth:`wait` with the number returned waits until it is on disk."""
         self._checkpoints += 1
         if self._pid:
-            self._pending.append(_HEADER.pack(0, 0))
+            self._pending.append(_HEADER.pack(0, 0, 0))
             self._flush()
         else:
             self._confirmed = self._checkpoints
@@ -225,14 +251,14 @@ def _serve(fd: int, acks: int) -> None:  # pragma: no cover - runs in the child
             break
         buffer += chunk
         while len(buffer) - position >= _HEADER.size:
-            path_len, data_len = _HEADER.unpack_from(buffer, position)
+            path_len, data_len, replace = _HEADER.unpack_from(buffer, position)
             end = position + _HEADER.size + path_len + data_len
             if len(buffer) < end:
                 break
             start = position + _HEADER.size
             if path_len:
                 path = bytes(buffer[start:start + path_len]).decode("utf-8", "surrogateescape")
-                write_file(path, bytes(buffer[start + path_len:end]))
+                write_file(path, bytes(buffer[start + path_len:end]), bool(replace))
             else:
                 _write_all(acks, b"+")
             position = end

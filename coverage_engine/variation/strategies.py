@@ -35,6 +35,7 @@ from coverage_engine.errors import OscError, ResolveError
 from coverage_engine.variation.conditions import ConstraintTables
 from coverage_engine.variation.dimensions import Dimension
 from coverage_engine.variation.drawn import DrawnChoices
+from coverage_engine.variation.pairwise import pairwise_rows
 from coverage_engine.variation.plan import VariationPlan, _slots
 from coverage_engine.variation.template import TextTemplate
 
@@ -281,8 +282,13 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions,
     if any(not values for values in allowed):
         raise ResolveError("no value of one dimension resolves: nothing to cover")
     rng = random.Random(options.seed)
-    groups = list(itertools.combinations(range(len(sizes)), t))
     tables = plan.constraints
+    if t == 2 and tables is None:          # the common case has a fast builder of its own
+        pairs = sum(len(allowed[a]) * len(allowed[b]) for a, b in itertools.combinations(range(len(sizes)), 2))
+        every = sum(sizes[a] * sizes[b] for a, b in itertools.combinations(range(len(sizes)), 2))
+        plan.rows = pairwise_rows(sizes, allowed, rng, seeds)
+        return TupleCoverage(2, pairs, pairs, every - pairs)
+    groups = list(itertools.combinations(range(len(sizes)), t))
     uncovered: dict[tuple[int, ...], set[tuple[int, ...]]] = {
         g: {values for values in itertools.product(*(allowed[a] for a in g))
             if tables is None or tables.tuple_allowed(g, values)} for g in groups}

@@ -43,9 +43,17 @@ class Mapped(Sequence[T]):
         return self._fn(self._source[index])
 
 
+    def then(self, fn: Callable[[T], S]) -> Mapped[S]:
+        """``fn`` after this view's function, as one view over the same source (one lookup, not two)."""
+        first = self._fn
+        return Mapped(self._source, lambda item: fn(first(item)))
+
+
 def per_choice(values: Sequence[S], fn: Callable[[S], T]) -> Sequence[T]:
     """``fn`` of each value: a lazy view over a long sequence that is itself computed or compact (a
     :class:`Mapped`, an ``array``, a ``range``), a tuple over anything else."""
+    if isinstance(values, Mapped):
+        return values.then(fn)
     if not isinstance(values, (list, tuple)) and len(values) > LAZY_FROM:
         return Mapped(values, fn)
     return tuple(fn(v) for v in values)

@@ -199,8 +199,10 @@ class SceTemplate:
                  shown: Sequence[Sequence[str]], stored: Sequence[Sequence[object]],
                  documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None) -> None:
         model = "".join(chunks)
+        # Listed values are checked one by one; a lazy slot holds drawn numbers (plain one-line text).
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
-            _BLOCK_UNSAFE.search(r) is None and "\n" not in r for slot in replacements for r in slot)
+            _BLOCK_UNSAFE.search(r) is None and "\n" not in r
+            for slot in replacements if isinstance(slot, (list, tuple)) for r in slot)
         last = len(chunks) - 1
         if self._block:
             self._chunks = [_indent_chunk(c, i == 0, i == last) for i, c in enumerate(chunks)]
@@ -279,9 +281,15 @@ def _join(chunks: list[str], replacements: Sequence[Sequence[str]], choices) -> 
 _NOT_PRINTABLE = re.compile("[^\x09\x0a\x0d\x20-\x7e\x85\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|\ufeff")
 
 
+#: Text that :func:`_one_line` leaves as it is: printable ASCII without blanks.
+_PLAIN_WORD = re.compile(r"[\x21-\x7e]*")
+
+
 def _one_line(text: str) -> str:
     """``text`` fit for a comment line: whitespace runs (line breaks, NEL, LS, PS) become one space and
     characters a YAML stream may not carry are written as escapes (``\\x07``)."""
+    if _PLAIN_WORD.fullmatch(text):      # a number, a name: nothing to change (most values)
+        return text
     joined = " ".join(text.split())
     return _NOT_PRINTABLE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), joined)
 

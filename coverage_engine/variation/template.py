@@ -15,8 +15,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from coverage_engine.lazy import per_choice
+from coverage_engine.lazy import Mapped
 from coverage_engine.variation.dimensions import Dimension
+from coverage_engine.variation.drawn import DrawnChoices
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,7 @@ class TextTemplate:
         tail = text[position:].rstrip("\n") + "\n"
         tail, owed = _give_back(tail, owed)
         chunks.append(tail + "\n" * owed)
-        replacements = tuple(per_choice(range(len(dim.choices)), dim.replacement) for dim in dimensions)
+        replacements = tuple(_replacements(dim) for dim in dimensions)
         return cls(tuple(chunks), replacements)
 
     def render(self, choices: Sequence[int]) -> str:
@@ -55,6 +56,15 @@ class TextTemplate:
             parts.append(slot[choices[i]])
             parts.append(chunks[i + 1])
         return "".join(parts)
+
+
+def _replacements(dim: Dimension) -> Sequence[str]:
+    """The replacement text of each choice; for drawn values formatted from the number when asked for."""
+    choices = dim.choices
+    if isinstance(choices, DrawnChoices):
+        head, unit = f"{dim.left} == ", choices.spec.unit
+        return Mapped(choices.values, lambda value: f"{head}{value!r}{unit}")
+    return tuple(dim.replacement(i) for i in range(len(choices)))
 
 
 def _give_back(chunk: str, owed: int) -> tuple[str, int]:

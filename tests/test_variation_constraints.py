@@ -202,3 +202,21 @@ def test_a_condition_among_an_actors_members_is_refused(tmp_path):
                                   "scenario s:\n    do log('x')\n")
     assert done.returncode == 1
     assert done.stderr.startswith("s.osc:4:5: error: not supported: a keep condition among the members of actor 'car'")
+
+
+def test_the_store_keeps_what_a_covering_array_covered(tmp_path):
+    import json
+    import sqlite3
+
+    (tmp_path / "cut.osc").write_text(DISCRETE)
+    done = run_variation(tmp_path, "cut.osc", "--strategy", "pairwise", "--seed", "2")
+    assert done.returncode == 0, done.stderr
+    with sqlite3.connect(tmp_path / ".scenario_store.db") as db:
+        (options,) = db.execute("SELECT options FROM variation_runs").fetchone()
+    recorded = json.loads(options)
+    assert recorded["strategy"] == "pairwise" and recorded["seed"] == 2
+    tuples = recorded["tuples"]
+    assert tuples["covered"] == tuples["coverable"] and tuples["strength"] == 2
+    assert f"{tuples['covered']} of {tuples['coverable']} coverable 2-tuples covered ({tuples['impossible']} impossible" \
+        in done.stdout
+    assert recorded["variants"] == len(list((tmp_path / "out").glob("*.sce")))

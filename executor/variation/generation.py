@@ -148,7 +148,8 @@ def run(request: VariationRequest) -> int:
                 break
             draw *= 2
         seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
-        tuples = strategies.build_covering_array(plan, options, seeds) if covering else None
+        tuple_coverage = strategies.build_covering_array(plan, options, seeds) if covering else None
+        tuples = tuple_coverage
         plan.strategy_note = strategies.describe_options(options)
         report.describe(plan)
         if request.strategy != "full":
@@ -172,7 +173,10 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
-            return _write(plan, request, _open_store(request.store), seed, held, options.blocks)
+            covered = None if tuple_coverage is None else {
+                "strength": tuple_coverage.strength, "covered": tuple_coverage.covered,
+                "coverable": tuple_coverage.coverable, "impossible": tuple_coverage.impossible}
+            return _write(plan, request, _open_store(request.store), seed, held, options.blocks, covered)
 
 
 def _open_store(url: str | None) -> Engine:
@@ -219,7 +223,8 @@ def _held(request: VariationRequest) -> HeldVariants:
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None,
-           held: HeldVariants | None = None, blocks: tuple[int, ...] = ()) -> int:
+           held: HeldVariants | None = None, blocks: tuple[int, ...] = (),
+           tuples: dict[str, int] | None = None) -> int:
     from coverage_engine.variation.output import (
         VariantWriteError,
         generate,
@@ -271,7 +276,9 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
         recorder = VariationRecorder(
             engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
             source_text=plan.text, options={**request.recorded_options(plan.path, seed),
-                                            **({"blocks": list(blocks)} if blocks else {})},
+                                            **({"blocks": list(blocks)} if blocks else {}),
+                                            **({"tuples": tuples} if tuples else {}),
+                                            "variants": plan.total, "excluded_by_conditions": plan.excluded},
             output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())
     except StoreError as exc:
         raise VariationStoreError(f"{exc} (nothing was written)") from exc

@@ -233,8 +233,9 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
               help="Jobs this worker runs in parallel ('auto': one per CPU).")
 @click.option("--batch", "batch_id", type=int, help="Only this batch (default: every shared batch).")
-@click.option("-o", "--output-root", type=click.Path(file_okay=False),
-              help="Put job folders here instead of the batch's output folder.")
+@click.option("-o", "--output-dir", "--output-root", "output_root", type=click.Path(file_okay=False),
+              help="Put job folders here instead of the batch's output folder (-o means the output folder, as "
+                   "for the run itself; --output-root is the older name).")
 @click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat.")
 @click.option("--poll", type=Seconds(0.01), default=1.0, show_default=True, metavar="S",

@@ -99,8 +99,8 @@ def test_enqueue_workers_status_report(store_url, tmp_path):
     status = run_cli(["status", "--store", store_url], tmp_path, env)
     assert status.returncode == 0 and "queued     24" in status.stdout, status.stdout
 
-    workers = [start_cli(["worker", "--store", store_url, "-j", "2", "--poll", "0.1", "-o", f"host{i}"],
-                         tmp_path, env) for i in range(2)]
+    workers = [start_cli(["worker", "--store", store_url, "-j", "2", "--poll", "0.1",
+                          "-o" if i == 0 else "--output-dir", f"host{i}"], tmp_path, env) for i in range(2)]
     outputs = [w.communicate(timeout=120)[0] for w in workers]
     assert all(w.returncode == 0 for w in workers), outputs
     assert all("worker done" in out for out in outputs), outputs

@@ -85,10 +85,11 @@ def _report(results: str | None, store_url: str | None, batch_id: int | None,
 
 
 def _gate(report: CoverageReport, fail_under: float | None) -> int:
-    """``--fail-under``: one comparison on the computed grade."""
+    """``--fail-under``: one comparison on the grade as the report shows it (one decimal), as coverage.py
+    compares at its display precision: a report saying 90.0 % never fails ``--fail-under 90``."""
     if fail_under is None:
         return 0
-    grade = report.grade if report.grade is not None else 0.0
+    grade = round(report.grade, 1) if report.grade is not None else 0.0
     if grade < fail_under:
         click.echo(f"{PROG}: coverage grade {grade:.1f} % is below --fail-under {fail_under:g} %", err=True)
         return EXIT_BELOW

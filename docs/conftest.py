@@ -4,8 +4,9 @@ A ``console`` block is a shell session: lines starting with ``$ `` are commands,
 are what its output must contain, in order (``...`` stands for anything, within a line or for whole
 lines). Each page runs in its own temporary folder holding ``examples/`` (a link to the repository's,
 which the examples only read), with this interpreter's commands first on ``PATH``. A command must
-exit 0 unless its line ends with ``# exit N``. A block that cannot run (an install, a placeholder path)
-is preceded by ``<!-- skip: next -->``.
+exit 0 unless its line ends with ``# exit N``. A command that cannot run here (an install, a database
+or a launch file of the reader's) is written in an ``sh`` block, which is shown and never run, with its
+placeholders named in a comment; ``<!-- skip: next -->`` skips a ``console`` block.
 
 Sybil is the well-kept tool for this (it runs code blocks of Markdown and reST through pytest, with
 custom evaluators for other languages); prysk would need the sessions moved into ``.t`` files, and

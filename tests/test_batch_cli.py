@@ -248,6 +248,7 @@ def test_shards_partition_the_files(tmp_path):
                          *child_command(child)], tmp_path)
         assert again.returncode == 0 and list(_suites(tmp_path / f"again{index}" / "test.xml")) == names
         seen += names
+        assert len(names) == 4, names                 # 12 files in 3 shards: 4 each, none left empty
     assert sorted(seen) == sorted(specs)
 
 

@@ -296,3 +296,11 @@ def test_an_older_store_is_read_as_it_is_and_a_newer_one_refused(child_batch, tm
     assert done.stderr == (f"error: the store at sqlite:///{old} has schema version 99, this release reads "
                            f"versions 1, 2; use a matching release\n")
     assert old.read_bytes() == newer
+
+
+def test_fail_under_compares_the_grade_as_shown(child_batch):
+    """A report that says 76.6 % passes --fail-under 76.6 even when the grade is 76.56 (coverage.py's rule)."""
+    shown = coverage("report", "results", cwd=child_batch.root)
+    assert "Overall grade 76.6 %" in shown.stdout
+    assert coverage("report", "results", "--fail-under", "76.6", cwd=child_batch.root).returncode == 0
+    assert coverage("report", "results", "--fail-under", "76.7", cwd=child_batch.root).returncode == 1

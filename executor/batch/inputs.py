@@ -87,19 +87,28 @@ class Shard:
             raise BadShard(f"--shard {text!r}: need 1 <= i <= N")
         return cls(index, count)
 
-    def keeps(self, sha: str) -> bool:
-        """Whether a file whose content hashes to ``sha`` belongs to this shard (stable across hosts and runs)."""
-        return int(sha[:16], 16) % self.count == self.index - 1
+    def select(self, keys: Sequence[str]) -> set[int]:
+        """The positions (in ``keys``) of the files of this shard.
+
+        Files are ordered by their key (content hash, then name), which every host of a CI matrix computes
+        alike whatever order its file system lists them in, and dealt round-robin: shards differ in size
+        by one file at most (a hash modulo N can leave a shard of 4 files empty).
+        """
+        order = sorted(range(len(keys)), key=lambda i: keys[i])
+        return {position for rank, position in enumerate(order) if rank % self.count == self.index - 1}
 
 
 def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec]:
     """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
     specs = []
-    for path in files:
-        data = path.read_bytes()
-        sha = hashlib.sha256(data).hexdigest()
-        if shard is not None and not shard.keeps(sha):
+    contents = [path.read_bytes() for path in files] if shard is not None else None
+    kept = shard.select([hashlib.sha256(data).hexdigest() + "\0" + path.name
+                         for path, data in zip(files, contents or [], strict=True)]) if shard is not None else None
+    for position, path in enumerate(files):
+        if kept is not None and position not in kept:
             continue
+        data = contents[position] if contents is not None else path.read_bytes()
+        sha = hashlib.sha256(data).hexdigest()
         text = None
         if len(data) <= MAX_STORED_TEXT:
             try:

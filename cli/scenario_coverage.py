@@ -110,22 +110,26 @@ def report_command(results: str | None, store_url: str | None, batch_id: int | N
     """Print the coverage of RESULTS: items, buckets, grades, holes and failing runs."""
     from rich.console import Console
 
-    from coverage_engine.coverage.render_text import render_text
+    from coverage_engine.coverage.render_text import plain_width, render_text
     from executor.terminal import wants_rich
 
     report = _report(results, store_url, batch_id, plan_file)
-    if output:
-        import io
+    rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
+    if rich:
+        render_text(report, Console(force_terminal=True, highlight=False), plain=False)
+        return _gate(report, fail_under)
+    import io
 
+    buffer = io.StringIO()
+    render_text(report, Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False),
+                plain=True)
+    text = "".join(line.rstrip() + "\n" for line in buffer.getvalue().splitlines())   # no padding in files and logs
+    if output:
         from coverage_engine.coverage.atomic import write_text_atomically
 
-        buffer = io.StringIO()
-        render_text(report, Console(file=buffer, width=120, color_system=None, force_terminal=False), plain=True)
-        write_text_atomically(_output_path(output), buffer.getvalue())
+        write_text_atomically(_output_path(output), text)
     else:
-        rich = wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
-        console = Console(width=None if rich else 120, force_terminal=rich, highlight=False)
-        render_text(report, console, plain=not rich)
+        sys.stdout.write(text)
     return _gate(report, fail_under)
 
 

@@ -304,3 +304,14 @@ def test_fail_under_compares_the_grade_as_shown(child_batch):
     assert "Overall grade 76.6 %" in shown.stdout
     assert coverage("report", "results", "--fail-under", "76.6", cwd=child_batch.root).returncode == 0
     assert coverage("report", "results", "--fail-under", "76.7", cwd=child_batch.root).returncode == 1
+
+
+def test_plain_report_cuts_nothing_and_pads_nothing(child_batch):
+    """In a pipe or a file (a CI log) the report is as wide as its longest item needs: no name or cell
+    cut with an ellipsis or wrapped, and no line padded with trailing blanks."""
+    shown = coverage("report", "results", cwd=child_batch.root)
+    assert shown.returncode == 0
+    assert "…" not in shown.stdout
+    assert all(line == line.rstrip() for line in shown.stdout.splitlines())
+    rows = [line for line in shown.stdout.splitlines() if line.startswith(" input:") or line.startswith(" cut_in")]
+    assert rows and all(line.split()[0] for line in rows)

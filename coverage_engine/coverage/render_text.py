@@ -236,6 +236,13 @@ def _failing(report: CoverageReport, style: _Style) -> Table | None:
     return table
 
 
+def plain_width(report: CoverageReport) -> int:
+    """Columns for plain output (a file, a CI log): wide enough that no item name or cell is cut or
+    wrapped, as there is no terminal width to fit (at least 120)."""
+    longest = max((len(item.name) for item in report.items), default=0)
+    return max(120, longest + 100)
+
+
 def render_text(report: CoverageReport, console: Console, *, plain: bool) -> None:
     """Print ``report`` on ``console``; ``plain`` uses ASCII bars and boxes and no colour."""
     style = _Style(plain)

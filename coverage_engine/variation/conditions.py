@@ -26,7 +26,7 @@ from pathlib import Path
 from coverage_engine.errors import ResolveError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
-from coverage_engine.variation.dimensions import Dimension, _invocations, _keeps, _path
+from coverage_engine.variation.dimensions import Dimension, _keeps, _path, invocation_steps
 
 #: Most combinations of a condition's dimensions resolved up front; beyond, outcomes are found per row.
 TABLE_LIMIT = 4096
@@ -86,17 +86,7 @@ def _scenario_keeps(decl: s.TypeDecl) -> Iterator[tuple[s.KeepConstraint, list[s
             for keep in _keeps(member.with_members):
                 yield keep, [member.names[0]]
         elif isinstance(member, s.DoDirective):
-            from collections import Counter
-
-            invocations = sorted(_invocations(member.behavior), key=lambda inv: inv.location.start_pos)
-            names = Counter(inv.name.dotted for inv in invocations if inv.label is None)
-            seen: Counter = Counter()
-            for inv in invocations:
-                step = inv.label or inv.name.dotted
-                if inv.label is None:
-                    if names[step] > 1:
-                        step = f"{step}[{seen[step]}]"
-                    seen[inv.name.dotted] += 1
+            for step, inv in invocation_steps(member.behavior):
                 for keep in _keeps(inv.with_members):
                     yield keep, [step]
 

@@ -276,6 +276,23 @@ def _invocations(node: object) -> Iterator[s.Invocation]:
                 yield from _invocations(child)
 
 
+def invocation_steps(behavior: object) -> list[tuple[str, s.Invocation]]:
+    """The invocations of a ``do`` tree in source order, each with the step name its keys use: its label,
+    else its action name, with ``[n]`` when that action is invoked several times (``log[1]``)."""
+    invocations = sorted(_invocations(behavior), key=lambda inv: inv.location.start_pos)
+    names = Counter(inv.name.dotted for inv in invocations if inv.label is None)
+    seen: Counter = Counter()
+    steps = []
+    for inv in invocations:
+        step = inv.label or inv.name.dotted
+        if inv.label is None:
+            if names[step] > 1:
+                step = f"{step}[{seen[step]}]"
+            seen[inv.name.dotted] += 1
+        steps.append((step, inv))
+    return steps
+
+
 def _keeps(members) -> Iterator[s.KeepConstraint]:
     return (m for m in members if isinstance(m, s.KeepConstraint))
 
@@ -292,15 +309,7 @@ def _scenario_dimensions(decl: s.TypeDecl, text: str) -> Iterator[Dimension]:
         elif isinstance(member, s.KeepConstraint):
             found.append(_keep_dimension(member, text, scenario, [], None))
         elif isinstance(member, s.DoDirective):
-            invocations = sorted(_invocations(member.behavior), key=lambda inv: inv.location.start_pos)
-            names = Counter(inv.name.dotted for inv in invocations if inv.label is None)
-            seen: Counter = Counter()
-            for inv in invocations:
-                step = inv.label or inv.name.dotted
-                if inv.label is None:
-                    if names[step] > 1:
-                        step = f"{step}[{seen[step]}]"
-                    seen[inv.name.dotted] += 1
+            for step, inv in invocation_steps(member.behavior):
                 found += [_keep_dimension(k, text, scenario, [step],
                                           (scenario, "invocation", inv.location.start_pos))
                           for k in _keeps(inv.with_members)]

@@ -305,13 +305,7 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions,
     rows: list[tuple[int, ...]] = []
     remaining = coverable
     for seed_row in seeds:
-        for g in groups:
-            key = tuple(seed_row[a] for a in g)
-            if key in uncovered[g]:
-                uncovered[g].discard(key)
-                remaining -= 1
-                for a, v in zip(g, key, strict=True):
-                    pending[a][v] -= 1
+        remaining -= _cover(seed_row, groups, uncovered, pending)
     while remaining:
         best_row: list[int] | None = None
         best_gain = -1
@@ -334,16 +328,24 @@ def build_covering_array(plan: VariationPlan, options: StrategyOptions,
         if best_row is None:
             continue
         assert best_gain > 0
-        for g in groups:
-            key = tuple(best_row[a] for a in g)
-            if key in uncovered[g]:
-                uncovered[g].discard(key)
-                remaining -= 1
-                for a, v in zip(g, key, strict=True):
-                    pending[a][v] -= 1
+        remaining -= _cover(best_row, groups, uncovered, pending)
         rows.append(tuple(best_row))
     plan.rows = _drop_redundant(rows, groups)
     return TupleCoverage(t, coverable, coverable, impossible)
+
+
+def _cover(row: Sequence[int], groups: Sequence[tuple[int, ...]],
+           uncovered: dict[tuple[int, ...], set[tuple[int, ...]]], pending: list[list[int]]) -> int:
+    """Mark the t-tuples ``row`` holds covered; returns how many were still open."""
+    taken = 0
+    for g in groups:
+        key = tuple(row[a] for a in g)
+        if key in uncovered[g]:
+            uncovered[g].discard(key)
+            taken += 1
+            for a, v in zip(g, key, strict=True):
+                pending[a][v] -= 1
+    return taken
 
 
 def _candidate(uncovered: dict[tuple[int, ...], set[tuple[int, ...]]], groups: Sequence[tuple[int, ...]],

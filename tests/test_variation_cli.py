@@ -120,3 +120,20 @@ def test_parameter_documents_multiply(tmp_path):
 def test_missing_file(tmp_path):
     result = run(tmp_path, "absent.osc")
     assert result.returncode == 1 and "absent.osc" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_a_parameter_document_placing_its_run_varies_and_runs(tmp_path):
+    """``_output_dir`` in a document is the runner's key: variation keeps it in the .sce, the variant runs."""
+    import subprocess
+    import sys
+
+    (tmp_path / "p.osc").write_text("import osc.helpers\nscenario p:\n    speed: float = 1.0\n"
+                                    "    do serial:\n        log('x')\n")
+    (tmp_path / "sweep.yaml").write_text("p:\n  speed: 2.0\n---\np:\n  speed: 3.0\n  _output_dir: fast\n")
+    done = run_variation(tmp_path, "p.osc", "--scenario-parameter-file", "sweep.yaml")
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "wrote 2 scenario file(s)" in done.stdout
+    run = subprocess.run([sys.executable, "-m", "cli.scenario_execution", "out/p1.sce", "-o", "r1"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert (tmp_path / "r1" / "test.xml").exists()

@@ -36,8 +36,10 @@ def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None 
         unit = parse_text(document.text, str(path))
         base_dir = Path(document.source_dir)
         if document.parameters:
-            recorded = {k: v for k, v in document.parameters.items() if k != "_output_dir"}
-            overrides = merge_overrides(recorded, overrides)
+            from coverage_engine.resolve.overrides import scenario_overrides
+
+            # the runner's _output_dir placed the document's run; a variant's results go where it is run
+            overrides = merge_overrides(scenario_overrides(dict(document.parameters)) or {}, overrides)
     else:
         unit = _parsed(path, parse_file)
         base_dir = path.parent

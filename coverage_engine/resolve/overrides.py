@@ -17,6 +17,18 @@ from coverage_engine.resolve.scope import ResolveContext, TypedExpr
 from coverage_engine.resolve.types import CompoundType, ConversionError, ListType, OscType, convert
 from coverage_engine.resolve.values import FieldInfo, OverrideHook, instantiate
 
+#: The key of a parameter document's scenario mapping that places that run's results (``_output_dir:
+#: fast_run``): read by the runner, never a parameter of the scenario.
+OUTPUT_DIR_KEY = "_output_dir"
+
+
+def scenario_overrides(document: dict | None) -> dict | None:
+    """``document`` without the runner's own keys (:data:`OUTPUT_DIR_KEY`): what the resolver applies."""
+    if document is None or not any(isinstance(v, dict) and OUTPUT_DIR_KEY in v for v in document.values()):
+        return document
+    return {name: ({k: v for k, v in values.items() if k != OUTPUT_DIR_KEY} if isinstance(values, dict) else values)
+            for name, values in document.items()}
+
 
 def check_document(document: Mapping | None, scenario_names: list[str]) -> dict[str, Mapping]:
     """The document's per-scenario mappings; errors for anything that is not ``{scenario: {param: value}}``."""

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
+from coverage_engine.resolve.overrides import scenario_overrides
 from coverage_engine.variation.conditions import (
     ConstraintTables,
     Evaluate,
@@ -164,7 +165,9 @@ class VariationPlan:
         return {key: values[c] for key, values, c in zip(self.keys, self.shown(), choices, strict=True)}
 
     def overrides(self, choices: Sequence[int]) -> dict | None:
-        return None if self.documents is None else self.documents[choices[-1]]
+        """The parameter document of ``choices`` as the resolver takes it (the runner's ``_output_dir`` left
+        out: the ``.sce`` keeps the whole document, and its run puts its results there)."""
+        return None if self.documents is None else scenario_overrides(self.documents[choices[-1]])
 
     def concrete_text(self, choices: Sequence[int]) -> str:
         """The concrete ``.osc`` text of a combination (line numbers as in the source)."""

@@ -16,8 +16,7 @@ from pathlib import Path
 
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.resolve.model import Scenario, ScenarioFile
-
-OUTPUT_DIR_KEY = "_output_dir"
+from coverage_engine.resolve.overrides import OUTPUT_DIR_KEY
 
 
 class PlannedRun:

@@ -208,14 +208,14 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
              held: Container[str] = frozenset(), first_index: int = 0) -> GenerationResult:
     """Write every valid combination of ``plan`` to ``output_dir``, in batches.
 
-    For each batch of up to ``batch_size`` valid variants, their files are written (each whole, under
-    a temporary name renamed over its own), then ``record(batch)`` is called (the caller commits their
+    For each batch of up to ``batch_size`` valid variants, their files are written (each whole, see
+    :func:`~coverage_engine.variation.writer.write_file`), then ``record(batch)`` is called (the caller commits their
     store rows), then ``on_item`` is called for each (skipped combinations go to ``on_item`` as they
     come). So a store row never names a file that was not written. With the background writer the
     next batch is rendered while the child writes the last one, and a batch is recorded once the
     child confirms its files. If a file cannot be written, the variants of the batches under way
-    whose files were written are recorded, and :class:`VariantWriteError` says how many are in all. ``stop()`` is asked before
-    each combination; when it says yes, the batch made so far is written and recorded and generation
+    whose files were written are recorded, and :class:`VariantWriteError` says how many are in all.
+    ``stop()`` is asked before each combination; when it says yes, the batch made so far is written and recorded and generation
     ends (``stopped`` in the result). Nothing is kept per variant beyond two batches, so memory does
     not grow with their number.
 
@@ -225,7 +225,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     rewrites nothing (truncating files is slow on some file systems, and mtimes stay meaningful).
 
     ``held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
-    combination is passed over (counted in ``held_count``), and the others are numbered from
+    combination is passed over (counted in the result's ``held``), and the others are numbered from
     ``first_index`` on without gaps.
     """
     folder = Path(output_dir)
@@ -237,6 +237,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     written = skipped = passed_over = 0
     stopped = False
     renumber = bool(held) or first_index > 0
+    next_index = first_index            # when renumbering: the index of the next variant written
     batch: list[Generated] = []
     unrecorded: list[_Batch] = []
     writer = FileWriter(background=plan.total >= BACKGROUND_FROM)
@@ -276,7 +277,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
                 if assignment in held:
                     passed_over += 1
                     continue
-                index = first_index + written + len(batch) + sum(len(b.items) for b in unrecorded)
+                index, next_index = next_index, next_index + 1
             text = template.render(index, choices)
             data = text.encode("utf-8")
             path = f"{prefix}{index}{SUFFIX}"
@@ -290,7 +291,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
         writer.close()
         settle(keep=0)
     except OSError as exc:
-        _end(writer)
+        writer.end_quietly()
         # The batches under way were written in part: record exactly the files that hold their text
         # (the others are absent or still an earlier generation's, whose rows stay right).
         landed = [item for done in [*unrecorded, _Batch(batch, 0)] for item in done.items
@@ -300,16 +301,8 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
             written += len(landed)
         raise VariantWriteError(exc, written) from exc
     finally:
-        _end(writer)
+        writer.end_quietly()
     return GenerationResult(written, skipped, stopped, passed_over)
-
-
-def _end(writer: FileWriter) -> None:
-    """Let the writer's child finish what it was sent (after an error elsewhere) without hiding that error."""
-    try:
-        writer.close()
-    except OSError:
-        pass
 
 
 def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...]) -> str:

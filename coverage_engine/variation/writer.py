@@ -60,17 +60,7 @@ def write_file(path: str, data: bytes, replace: bool = True) -> None:
             fd = os.open(path, _NEW_FLAGS, 0o644)
         except FileExistsError:
             return write_file(path, data, replace=True)
-        try:
-            _write_all(fd, data)
-        except OSError as exc:
-            os.close(fd)
-            os.unlink(path)
-            raise OSError(exc.errno, exc.strerror, path) from None
-        try:
-            os.close(fd)
-        except OSError as exc:
-            os.unlink(path)
-            raise OSError(exc.errno, exc.strerror, path) from None
+        _fill(fd, data, path, remove=path)
         return
     part = temporary_name(path)
     try:
@@ -80,22 +70,32 @@ def write_file(path: str, data: bytes, replace: bool = True) -> None:
             raise
         os.unlink(part)  # a link planted under the temporary name: remove the link itself, then create
         fd = os.open(part, _FLAGS, 0o644)
+    _fill(fd, data, path, remove=part)
+    try:
+        os.replace(part, path)
+    except OSError:
+        _unlink_quietly(part)
+        raise
+
+
+def _fill(fd: int, data: bytes, path: str, remove: str) -> None:
+    """Write all of ``data`` to ``fd`` and close it; on a failure remove ``remove`` (the file being made)
+    and raise an :class:`OSError` naming ``path`` (``os.write`` names no file)."""
     try:
         try:
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
+            _write_all(fd, data)
         finally:
             os.close(fd)
-        os.replace(part, path)
     except OSError as exc:
-        try:
-            os.unlink(part)
-        except OSError:
-            pass
-        if exc.filename is None:  # os.write names no file: say which one could not be written
-            raise OSError(exc.errno, exc.strerror, path) from None
-        raise
+        _unlink_quietly(remove)
+        raise OSError(exc.errno, exc.strerror, path) from None
+
+
+def _unlink_quietly(path: str) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
 
 
 class FileWriter:
@@ -175,11 +175,10 @@ class FileWriter:
     def _flush(self) -> None:
         if not self._pending:
             return
-        view = memoryview(b"".join(self._pending))
+        data = b"".join(self._pending)
         self._pending, self._size = [], 0
         try:
-            while view:
-                view = view[os.write(self._pipe, view):]
+            _write_all(self._pipe, data)
         except BrokenPipeError:
             self._finish(os.read(self._acks, 1))  # raises the child's error
             raise
@@ -213,15 +212,18 @@ class FileWriter:
     def __enter__(self) -> FileWriter:
         return self
 
+    def end_quietly(self) -> None:
+        """Let the child write what it was sent and end, ignoring its error: another one is on its way already."""
+        try:
+            self.close()
+        except OSError:
+            pass
+
     def __exit__(self, exc_type, exc, traceback) -> None:
         if exc_type is None:
             self.close()
-            return
-        try:  # an error is on its way already: wait for the child, but do not hide that error
-            if self._pid:
-                self._finish(b"")
-        except OSError:
-            pass
+        else:
+            self.end_quietly()
 
 
 def _child_error(payload: bytes, status: int) -> OSError:

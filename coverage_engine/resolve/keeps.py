@@ -85,19 +85,12 @@ def split_type_keeps(ctype: CompoundType, scope: Scope) -> tuple[list[KeepValue]
     A condition among the members of an actor or struct is refused: it would need a solver to choose
     each instance's values (the reference tool refuses every keep but ``==`` there too).
     """
-    values: list[KeepValue] = []
-    checks: list[KeepCheck] = []
-    for keep in ctype.keeps:
-        found = classify_keep(keep, scope)
-        if isinstance(found, KeepCheck):
-            if ctype.kind != "scenario":
-                raise UnsupportedFeatureError(
-                    f"not supported: a keep condition among the members of {ctype.kind} '{ctype.name}' (it would "
-                    "need a solver to choose each instance's values); fix a value with 'keep(member == value)', "
-                    "or put the condition in the scenario or in a 'with:' block", found.location)
-            checks.append(found)
-        else:
-            values.append(found)
+    values, checks = split_with_keeps(tuple(ctype.keeps), scope)
+    if checks and ctype.kind != "scenario":
+        raise UnsupportedFeatureError(
+            f"not supported: a keep condition among the members of {ctype.kind} '{ctype.name}' (it would "
+            "need a solver to choose each instance's values); fix a value with 'keep(member == value)', "
+            "or put the condition in the scenario or in a 'with:' block", checks[0].location)
     return values, checks
 
 

@@ -217,12 +217,10 @@ class ConstraintTables:
 
     def tuple_allowed(self, axes: Sequence[int], values: Sequence[int]) -> bool:
         """Whether a t-tuple (``values`` on ``axes``) breaks no condition whose axes it fixes entirely."""
-        fixed = dict(zip(axes, values, strict=True))
-        for condition in self.conditions:
-            if condition.axes and all(a in fixed for a in condition.axes) and not condition.per_row:
-                if tuple(fixed[a] for a in condition.axes) in condition.forbidden:
-                    return False
-        return True
+        row: list[int | None] = [None] * len(self.sizes)
+        for axis, value in zip(axes, values, strict=True):
+            row[axis] = value
+        return self.partial_allowed(row)
 
     def partial_allowed(self, row: Sequence[int | None]) -> bool:
         """Whether a partly filled row breaks no tabled condition whose axes are all filled."""

@@ -113,9 +113,7 @@ class VariationPlan:
     reference: list[int] = field(default_factory=list)
     #: The keep conditions and what they forbid (None: the file has none).
     constraints: ConstraintTables | None = None
-    #: Combinations left out because they break a keep condition (full product or drawn rows).
-    excluded: int = 0
-    #: Per condition text, how many combinations it left out.
+    #: Per condition text, how many combinations (full product or drawn rows) it left out.
     excluded_by: dict[str, int] = field(default_factory=dict)
     #: How the variants were chosen (``strategy lhs, samples 200, seed 7``), written in each ``.sce`` header.
     strategy_note: str | None = None
@@ -152,6 +150,11 @@ class VariationPlan:
         if self.documents is not None:
             stored.append(list(range(len(self.documents))))
         return stored
+
+    @property
+    def excluded(self) -> int:
+        """Combinations left out because they break a keep condition."""
+        return sum(self.excluded_by.values())
 
     @property
     def total(self) -> int:
@@ -320,7 +323,6 @@ def exclude_rows(plan: VariationPlan) -> None:
         if broken is None:
             kept.append(row)
         else:
-            plan.excluded += 1
             plan.excluded_by[broken.text] = plan.excluded_by.get(broken.text, 0) + 1
     plan.rows = kept
 

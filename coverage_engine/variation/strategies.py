@@ -186,7 +186,7 @@ def enough_samples(plan: VariationPlan, options: StrategyOptions, factor: int) -
     if len(plan.rows) >= options.samples:
         plan.rows = plan.rows[:options.samples]
         return True
-    if factor < MAX_OVERSAMPLING and plan.rows is not None:
+    if factor < MAX_OVERSAMPLING:
         return False
     worst = max(plan.excluded_by.items(), key=lambda item: item[1])
     where = next((c.location for c in plan.constraints.conditions if c.text == worst[0]), None) \

@@ -15,6 +15,7 @@ recorded, so every file on disk has its store row.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import threading
@@ -128,11 +129,13 @@ def run(request: VariationRequest) -> int:
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
         covering = request.strategy in strategies.COVERING
         limit = request.max_variants or DEFAULT_MAX_VARIANTS
-        held = _held(request) if request.only_new else None
+        engine = _open_store(request.store) if request.only_new else None
+        held = None
         draw = 1                       # a sampler draws more points when keep conditions reject some
         while True:
             plan = build_plan(Path(request.scenario), documents)
-            if held is not None and draw == 1:
+            if engine is not None and held is None:
+                held = _held(plan, request, engine)
                 options = strategies.continued(options, held.runs)
             strategies.draw_continuous(plan, strategies.oversampled(options, draw))
             wanted = plan.total if draw == 1 else options.samples or 0
@@ -148,8 +151,7 @@ def run(request: VariationRequest) -> int:
                 break
             draw *= 2
         seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
-        tuple_coverage = strategies.build_covering_array(plan, options, seeds) if covering else None
-        tuples = tuple_coverage
+        tuples = strategies.build_covering_array(plan, options, seeds) if covering else None
         plan.strategy_note = strategies.describe_options(options)
         report.describe(plan)
         if request.strategy != "full":
@@ -173,10 +175,7 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
-            covered = None if tuple_coverage is None else {
-                "strength": tuple_coverage.strength, "covered": tuple_coverage.covered,
-                "coverable": tuple_coverage.coverable, "impossible": tuple_coverage.impossible}
-            return _write(plan, request, _open_store(request.store), seed, held, options.blocks, covered)
+            return _write(plan, request, engine or _open_store(request.store), seed, held, options.blocks, tuples)
 
 
 def _open_store(url: str | None) -> Engine:
@@ -202,29 +201,22 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
     return text
 
 
-def _held(request: VariationRequest) -> HeldVariants:
-    """``--only-new``: what earlier runs of this source wrote into the output folder (per the store)."""
+def _held(plan: VariationPlan, request: VariationRequest, engine: Engine) -> HeldVariants:
+    """``--only-new``: what earlier runs of this source (path and text) wrote into the output folder."""
     from coverage_engine.variation.output import source_sha256
     from store.database import StoreError
     from store.variant_history import held_variants
 
-    path = Path(request.scenario)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        from store.variant_history import HeldVariants
-
-        return HeldVariants(frozenset(), 0, ())       # build_plan says what is wrong with the file
-    try:
-        return held_variants(_open_store(request.store), source_path=str(path.resolve()),
-                             source_sha256=source_sha256(text), output_dir=str(Path(request.output_dir).resolve()))
+        return held_variants(engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
+                             output_dir=str(Path(request.output_dir).resolve()))
     except StoreError as exc:
         raise VariationStoreError(f"{exc} (nothing was written)") from exc
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None,
            held: HeldVariants | None = None, blocks: tuple[int, ...] = (),
-           tuples: dict[str, int] | None = None) -> int:
+           tuples: TupleCoverage | None = None) -> int:
     from coverage_engine.variation.output import (
         VariantWriteError,
         generate,
@@ -238,7 +230,8 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     output_dir = Path(request.output_dir)
     # Files of the new generation overwrite those of the same name in place (far cheaper than
     # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
-    longest = f"{plan.path.stem}{max(plan.total - 1, 0)}.sce"
+    first = held.next_index if held is not None else 0     # --only-new numbers after the earlier runs
+    longest = f"{plan.path.stem}{max(first + plan.total - 1, 0)}.sce"
     limit = _name_max(output_dir)
     if len(os.fsencode(longest)) > limit:
         raise OutputNameTooLong(
@@ -247,7 +240,6 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             Location(str(plan.path), 0, 0), hint="give the .osc file a shorter name")
     # Only what an earlier generation of the same source wrote is replaced; a file of the same name that
     # it did not write (hand-written, another tool's, a symbolic link) stops the run before anything is written.
-    first = held.next_index if held is not None else 0
     survey = survey_output(output_dir, plan.path, plan.total, first)
     foreign = survey.foreign
     if foreign:
@@ -259,14 +251,14 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             Location(str(plan.path), 0, 0),
             hint="move those files away, or write the variants to another folder with -o")
     old = {p.name: p for p in survey.earlier}
+    others = _other_sce_files(output_dir, set(old))
     if held is not None:            # --only-new adds to the earlier runs' files; it replaces none of them
         if old:
             echo(f"keeping {len(old)} .sce file(s) of earlier runs in {output_dir}/; the variants they hold are "
                  "not written again")
-        ours, old = set(old), {}
+        old = {}
     elif old:
         echo(f"replacing {len(old)} .sce file(s) of an earlier generation in {output_dir}/")
-    others = _other_sce_files(output_dir, set(old) if held is None else ours)
     if others:
         echo(f"leaving {others} other .sce file(s) in {output_dir}/ untouched (not variants of {plan.path.name})")
     debug, verbose = request.debug, plan.total <= LIST_FILES_UP_TO
@@ -277,7 +269,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
             engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
             source_text=plan.text, options={**request.recorded_options(plan.path, seed),
                                             **({"blocks": list(blocks)} if blocks else {}),
-                                            **({"tuples": tuples} if tuples else {}),
+                                            **({"tuples": dataclasses.asdict(tuples)} if tuples else {}),
                                             "variants": plan.total, "excluded_by_conditions": plan.excluded},
             output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())
     except StoreError as exc:

@@ -23,6 +23,14 @@ from typing import Any, BinaryIO, Protocol
 
 _CHUNK = 64 * 1024
 
+#: Errors that mean "the disk is full", whoever met them.
+DISK_FULL_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
+
+
+def disk_full(exc: BaseException) -> bool:
+    """Whether ``exc`` says the disk (or the user's quota) is full."""
+    return isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS
+
 
 class Launcher(Protocol):
     """Starts a command some other way than ``exec`` (the built-in runner forks it from a warm server)."""
@@ -221,7 +229,7 @@ class ChildProcess:
         error = self._log_error
         return ProcessOutcome(returncode=returncode, started_at=self._started_at, finished_at=finished,
                               timed_out=self._timed_out, cancelled=self._cancelled and not self._timed_out,
-                              disk_full=error is not None and error.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)))
+                              disk_full=error is not None and disk_full(error))
 
     def cancel(self, grace: float | None = None) -> None:
         """Ask the child's group to stop (SIGINT), kill it after ``grace`` seconds (0: at once)."""

@@ -101,13 +101,13 @@ class Shard:
 def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec]:
     """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
     specs = []
-    contents = [path.read_bytes() for path in files] if shard is not None else None
-    kept = shard.select([hashlib.sha256(data).hexdigest() + "\0" + path.name
-                         for path, data in zip(files, contents or [], strict=True)]) if shard is not None else None
+    # A shard hashes every file to place it, holding only the hashes (not 666,469 files' contents).
+    kept = shard.select([hashlib.sha256(path.read_bytes()).hexdigest() + "\0" + path.name for path in files]) \
+        if shard is not None else None
     for position, path in enumerate(files):
         if kept is not None and position not in kept:
             continue
-        data = contents[position] if contents is not None else path.read_bytes()
+        data = path.read_bytes()
         sha = hashlib.sha256(data).hexdigest()
         text = None
         if len(data) <= MAX_STORED_TEXT:

@@ -22,13 +22,12 @@ from executor.batch.verdict import (
     LOG_FILE,
     RESULT_FILE,
     FileMark,
-    disk_full,
     disk_full_result,
     judge,
     launch_failure,
 )
 from executor.hooks import run_post_hooks
-from executor.process import ChildProcess, Launcher
+from executor.process import ChildProcess, Launcher, disk_full
 from store.jobs import Batch, Job, JobResult
 from store.states import NOT_STARTED_REASON, JobState
 

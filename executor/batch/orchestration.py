@@ -20,9 +20,9 @@ from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
-from executor.batch.verdict import disk_full
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.junit import write_report
+from executor.process import disk_full
 from store.jobs import Batch, BatchOptions
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState

@@ -10,7 +10,6 @@ neither: it is ``cancelled`` with :data:`DISK_FULL_REASON` (the batch stops; ``-
 
 from __future__ import annotations
 
-import errno
 import os
 import stat
 from dataclasses import dataclass
@@ -35,8 +34,6 @@ DISK_FULL_REASON = "not finished: no space left on the device holding its folder
 #: Below this many free bytes (or with no free inode) a file system counts as full.
 LOW_SPACE_BYTES = 64 * 1024
 
-#: Errors that mean "the disk is full", whoever met them.
-DISK_FULL_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
 
 
 def out_of_space(folder: Path) -> bool:
@@ -47,11 +44,6 @@ def out_of_space(folder: Path) -> bool:
         return False
     free_blocks = st.f_bfree if os.geteuid() == 0 else st.f_bavail   # root may use the reserved blocks
     return free_blocks * st.f_frsize < LOW_SPACE_BYTES or (st.f_files > 0 and st.f_favail == 0)
-
-
-def disk_full(exc: BaseException) -> bool:
-    """Whether ``exc`` says the disk (or the user's quota) is full."""
-    return isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS
 
 
 @dataclass(frozen=True)

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING, BinaryIO
 from executor.batch.builtin_runner import ForkServer, ForkServerError
 from executor.batch.job_run import Done, JobRun, Started, job_marker
 from executor.batch.progress import Reporter
-from executor.batch.verdict import DISK_FULL_REASON, disk_full, disk_full_result, launch_failure
+from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
-from executor.process import RUNNER_ENV, end_orphan_group
+from executor.process import RUNNER_ENV, disk_full, end_orphan_group
 from store.database import StoreError
 from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
@@ -274,18 +274,14 @@ class Worker:
         output_dir = root / job.name
         began = time.time()
         problem: str | None = None
+        full_disk = False                   # the problem is a full disk: the job is stopped, not judged
         try:
             prepare_job_folder(root, output_dir)
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
         except OSError as exc:
-            if disk_full(exc):
-                self._runs[job.id] = run = JobRun(job, batch, output_dir, job.scenario_path, self._events)
-                self._started += 1
-                self.reporter.job_started(job)
-                self._events.put(Done(run, disk_full_result(output_dir, began, time.time())))
-                return
+            full_disk = disk_full(exc)
             scenario, problem = job.scenario_path, f"cannot prepare the job: {exc.strerror or exc}" + (
                 f": {exc.filename}" if exc.filename else "")
         except Exception as exc:  # noqa: BLE001 - one job that cannot be prepared must not end the loop
@@ -308,7 +304,9 @@ class Worker:
                 return
             except RuntimeError as exc:           # no thread could be started
                 problem = f"cannot start the job: {exc}"
-        self._events.put(Done(run, launch_failure(output_dir, began, time.time(), problem)))
+        ended = time.time()
+        self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
+                              else launch_failure(output_dir, began, ended, problem)))
 
     def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
         """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""

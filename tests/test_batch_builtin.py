@@ -222,8 +222,13 @@ def test_ctrl_c_stops_builtin_jobs_and_resume_finishes(tmp_path):
     env = make_variants(tmp_path, [f"c{i}" for i in range(6)], pause=1.0)
     runner = start_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
     deadline = time.monotonic() + 60
-    while not (tmp_path / "res/job1/log.txt").exists() or "Executing" not in (
-            tmp_path / "res/job1/log.txt").read_text():
+
+    def executing(job: str) -> bool:
+        log = tmp_path / f"res/{job}/log.txt"
+        return log.exists() and "Executing" in log.read_text()
+
+    # both running jobs have started their scenario (job0's log is read below): wait for that state
+    while not (executing("job0") and executing("job1")):
         assert time.monotonic() < deadline and runner.poll() is None
         time.sleep(0.02)
     runner.send_signal(signal.SIGINT)

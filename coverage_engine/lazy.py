@@ -3,9 +3,10 @@
 A sampler drawing 100,000 values for each of 10 continuous ranges makes 1,000,000 choices, each
 needed as source text, header comment, stored value, assignment fragment and replacement text. Held
 as Python strings that is several hundred megabytes; yet each drawn value is used by exactly one
-variant. So the per-choice texts of a drawn dimension are :class:`Mapped` views that format the value
-when a variant is rendered (:func:`per_choice`); listed dimensions (a few values, each used by many
-variants) keep precomputed tuples.
+variant. So the per-choice texts of a drawn dimension are views that format the value when a variant
+is rendered: :class:`NumberTexts` (a fixed prefix and suffix around the number, which lets the
+renderer spell each number once for all the texts of a row) or :class:`Mapped` (any function);
+listed dimensions (a few values, each used by many variants) keep precomputed tuples.
 """
 
 from __future__ import annotations
@@ -47,6 +48,44 @@ class Mapped(Sequence[T]):
         """``fn`` after this view's function, as one view over the same source (one lookup, not two)."""
         first = self._fn
         return Mapped(self._source, lambda item: fn(first(item)))
+
+
+class NumberTexts(Sequence[str]):
+    """``prefix + spell(number) + suffix`` for each number of ``numbers`` (an ``array('d')``), on access.
+
+    ``spell`` is ``repr`` unless given; a ``spell`` that is not ``repr`` must give ``repr(number)`` for
+    every number whose repr :func:`plain_number` accepts, so a renderer holding the repr may use it.
+    """
+
+    __slots__ = ("numbers", "prefix", "suffix", "spell")
+
+    def __init__(self, numbers: Sequence[float], prefix: str = "", suffix: str = "",
+                 spell: Callable[[float], str] = repr) -> None:
+        self.numbers, self.prefix, self.suffix, self.spell = numbers, prefix, suffix, spell
+
+    def __len__(self) -> int:
+        return len(self.numbers)
+
+    @overload
+    def __getitem__(self, index: int) -> str: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[str]: ...
+
+    def __getitem__(self, index: Any) -> Any:
+        if isinstance(index, slice):
+            return [self.prefix + self.spell(number) + self.suffix for number in self.numbers[index]]
+        return self.prefix + self.spell(self.numbers[index]) + self.suffix
+
+    def around(self, prefix: str, suffix: str) -> NumberTexts:
+        """The same texts with ``prefix`` before and ``suffix`` after each."""
+        return NumberTexts(self.numbers, prefix + self.prefix, self.suffix + suffix, self.spell)
+
+
+def plain_number(text: str) -> bool:
+    """Whether ``text`` (a float's repr) is a plain decimal: a dot, no exponent, not inf or nan —
+    written the same way by ``repr``, JSON and YAML."""
+    return "." in text and "e" not in text and "n" not in text
 
 
 def per_choice(values: Sequence[S], fn: Callable[[S], T]) -> Sequence[T]:

@@ -70,10 +70,19 @@ def store_url(option: str | None = None) -> str:
 _SCHEMA_LOCK_KEY = 0x5CE5C0DE
 
 
+#: Page size of a new SQLite store (an existing file keeps the one it was created with).
+PAGE_SIZE = 8192
+
+
 def _sqlite_pragmas(dbapi_connection, _record) -> None:  # pragma: no cover - trivial
     # pysqlite's own BEGIN handling is switched off; _sqlite_begin emits BEGIN IMMEDIATE instead.
     dbapi_connection.isolation_level = None
     cursor = dbapi_connection.cursor()
+    # Only a new, empty file takes the page size (it must come before WAL mode is set). 8 KiB pages
+    # hold three variant rows (~2 KB each with their .sce text) where 4 KiB pages held one: measured
+    # on 100,000 variants, a store a third smaller written in 0.6x the time. (16 KiB gained little
+    # more for variants and cost the job queue a third of its rate: every commit writes whole pages.)
+    cursor.execute(f"PRAGMA page_size={PAGE_SIZE}")
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=30000")

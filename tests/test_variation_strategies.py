@@ -173,3 +173,25 @@ def test_foretify_unit_after_the_bracket_is_the_same_range(tmp_path):
     (tmp_path / "c.osc").write_text(CONTINUOUS.replace("[10kph..30kph]", "[10..x]kph"))
     refused = vary(tmp_path, "c.osc", "--strategy", "lhs", "--samples", "5")
     assert refused.returncode == 1 and "a range end must be a number" in refused.stderr
+
+
+def test_drawn_numbers_in_exponent_form_read_back_the_same_everywhere(tmp_path):
+    """A drawn number whose repr has an exponent (``5.3e-05``) is spelled the slow way in the YAML
+    assignment (PyYAML's ``5.3e-05`` would read back as a string) but the same number everywhere."""
+    (tmp_path / "tiny.osc").write_text("import osc.helpers\nscenario t:\n    d: float = 0.0 with:\n"
+                                       "        keep(it in [0.0..0.0001])\n    w: float = 0.0 with:\n"
+                                       "        keep(it in [1.0..2.0])\n    do serial:\n        log(d)\n")
+    done = vary(tmp_path, "tiny.osc", "--strategy", "lhs", "--samples", "12", "--seed", "5")
+    assert done.returncode == 0, done.stderr
+    files = sorted((tmp_path / "out").glob("*.sce"))
+    assert len(files) == 12
+    exponents = 0
+    for path in files:
+        sce = read_sce(path)
+        d, w = sce.assignment["t.d"], sce.assignment["t.w"]
+        assert isinstance(d, float) and 0.0 <= d <= 0.0001 and isinstance(w, float) and 1.0 <= w <= 2.0
+        text = path.read_text()
+        assert f"keep(it == {d!r})" in text and f"keep(it == {w!r})" in text
+        assert f"# t.d = {d!r}\n" in text and f"# t.w = {w!r}\n" in text
+        exponents += "e-" in repr(d)
+    assert exponents >= 10          # all but the top stratum (values of 1e-4 and up) print an exponent

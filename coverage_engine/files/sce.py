@@ -46,12 +46,13 @@ from __future__ import annotations
 
 import os
 import re
+from array import array
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
-from coverage_engine.lazy import per_choice
+from coverage_engine.lazy import NumberTexts, per_choice, plain_number
 from coverage_engine.location import Location
 
 #: The format version this release writes.
@@ -223,33 +224,72 @@ class SceTemplate:
         self._entries = [_entries(key, values) for key, values in zip(keys, stored, strict=True)]
         self._documents = None if documents is None else [f"parameters: {_quote(d)}\n" for d in documents]
         self.text_dimensions = len(replacements)
+        # Per dimension, the drawn numbers when each of its texts is a number in fixed text (else None).
+        self._drawn = [drawn_numbers([self._comments[i], self._entries[i]]
+                                     + ([replacements[i]] if i < len(replacements) else []))
+                       for i in range(len(keys))]
 
     def model_text(self, choices: tuple[int, ...] | list[int]) -> str:
         """The concrete ``.osc`` text for ``choices`` (not indented)."""
         if self._block:
             raise RuntimeError("model_text() is for the variation template, not the indented one")
-        return _join(self._chunks, self._replacements, choices)
+        return _join(self._chunks, self._replacements, choices, self.spell_row(choices))
 
-    def render(self, index: int, choices: tuple[int, ...] | list[int]) -> str:
-        """The ``.sce`` text of variant ``index`` made of ``choices`` (one choice index per dimension)."""
+    def spell_row(self, choices: tuple[int, ...] | list[int]) -> list[str | None]:
+        """Per dimension, the ``repr`` of the drawn number ``choices`` picks, when it is a plain decimal
+        (see :func:`~coverage_engine.lazy.plain_number`); None for a listed dimension or another number.
+
+        :meth:`render` and the caller's other texts of the row (the stored assignment) share it: a
+        drawn number is spelled once per variant, not once per text that shows it.
+        """
+        spelled: list[str | None] = []
+        for numbers, choice in zip(self._drawn, choices, strict=False):
+            text = None if numbers is None else repr(numbers[choice])
+            spelled.append(text if text is not None and plain_number(text) else None)
+        return spelled
+
+    def render(self, index: int, choices: tuple[int, ...] | list[int],
+               spelled: list[str | None] | None = None) -> str:
+        """The ``.sce`` text of variant ``index`` made of ``choices`` (one choice index per dimension).
+
+        ``spelled``: what :meth:`spell_row` gives for ``choices`` (computed here when not given).
+        """
+        if spelled is None:
+            spelled = self.spell_row(choices)
         parts = [self._magic, str(index), self._of]
-        for comments, choice in zip(self._comments, choices, strict=True):
-            parts.append(comments[choice])
+        _append_row(parts, self._comments, choices, spelled)
         parts += [self._head, str(index), "\n"]
         if self._entries:
             parts.append("assignment:\n")
-            for entries, choice in zip(self._entries, choices, strict=True):
-                parts.append(entries[choice])
+            _append_row(parts, self._entries, choices, spelled)
         else:
             parts.append("assignment: {}\n")
         if self._documents is not None:
             parts.append(self._documents[choices[-1]])
-        model = _join(self._chunks, self._replacements, choices)
+        model = _join(self._chunks, self._replacements, choices, spelled)
         if self._block:
             parts += ["model: |2\n", model, _END_LINE]
         else:
             parts += ["model: ", _quote(model.rstrip("\n") + "\n"), "\n", _END_LINE]
         return "".join(parts)
+
+
+def _append_row(parts: list[str], slots: Sequence[Sequence[str]], choices: Sequence[int],
+                spelled: Sequence[str | None]) -> None:
+    """Append each dimension's text for its choice; a drawn number uses its spelling from ``spelled``."""
+    for slot, choice, number in zip(slots, choices, spelled, strict=False):
+        if number is None:
+            parts.append(slot[choice])
+        else:
+            parts += (slot.prefix, number, slot.suffix)  # type: ignore[attr-defined]
+
+
+def drawn_numbers(slots: Sequence[Sequence[str]]) -> Sequence[float] | None:
+    """The numbers behind ``slots`` when every one is a :class:`NumberTexts` over the same numbers."""
+    numbers = [slot.numbers for slot in slots if isinstance(slot, NumberTexts)]
+    if len(numbers) != len(slots) or not numbers or any(n is not numbers[0] for n in numbers):
+        return None
+    return numbers[0]
 
 
 _END_LINE = SCE_END + "\n"
@@ -258,21 +298,29 @@ _END_LINE = SCE_END + "\n"
 def _comments(key: str, texts: Sequence[str]) -> Sequence[str]:
     """The header comment line of each choice of one dimension (``# key = value``)."""
     head = f"# {_one_line(key)} = "
+    if isinstance(texts, NumberTexts) and _PLAIN_WORD.fullmatch(texts.prefix + texts.suffix):
+        return texts.around(head, "\n")            # a number's repr is one plain word too
     return per_choice(texts, lambda text: f"{head}{_one_line(text)}\n")
 
 
 def _entries(key: str, values: Sequence[object]) -> Sequence[str]:
     """The assignment line of each choice of one dimension (``  "key": value``)."""
     head = f"  {_quote(key)}: "
+    if isinstance(values, array) and values.typecode == "d":
+        return NumberTexts(values, head, "\n", _quote)   # _quote spells a plain float as its repr
     return per_choice(values, lambda value: f"{head}{_quote(value)}\n")
 
 
-def _join(chunks: list[str], replacements: Sequence[Sequence[str]], choices) -> str:
+def _join(chunks: list[str], replacements: Sequence[Sequence[str]], choices, spelled) -> str:
     if not replacements:
         return chunks[0]
     parts = [chunks[0]]
     for i, slot in enumerate(replacements):
-        parts.append(slot[choices[i]])
+        number = spelled[i]
+        if number is None:
+            parts.append(slot[choices[i]])
+        else:
+            parts += (slot.prefix, number, slot.suffix)  # type: ignore[attr-defined]
         parts.append(chunks[i + 1])
     return "".join(parts)
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from array import array
 
-from coverage_engine.lazy import Mapped
+from coverage_engine.lazy import Mapped, NumberTexts
 from coverage_engine.variation.dimensions import Choice, RangeSpec
 
 
@@ -21,6 +21,6 @@ class DrawnChoices(Mapped[Choice]):
         self.values, self.spec = values, spec
 
     @property
-    def texts(self) -> Mapped[str]:
-        """Each drawn value as source text (``12.5kph``)."""
-        return Mapped(self.values, self.spec.text)
+    def texts(self) -> NumberTexts:
+        """Each drawn value as source text (``12.5kph``, as :meth:`RangeSpec.text` spells it)."""
+        return NumberTexts(self.values, "", self.spec.unit)

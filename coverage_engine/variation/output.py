@@ -14,12 +14,13 @@ import json
 import math
 import os
 import re
+from array import array
 from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.files.sce import SceTemplate, is_sce_text, relative_source_dir
-from coverage_engine.lazy import per_choice
+from coverage_engine.lazy import NumberTexts, per_choice
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
 
@@ -141,6 +142,8 @@ def _assignment_fragments(plan: VariationPlan) -> list[Sequence[str]]:
     """Per axis and choice, ``"key": value`` as it appears in the stored assignment JSON."""
     def fragments(key: str, values: Sequence[object]) -> Sequence[str]:
         prefix = f"{json.dumps(key, ensure_ascii=False)}: "
+        if isinstance(values, array) and values.typecode == "d":
+            return NumberTexts(values, prefix, "", _json_value)  # JSON spells a plain float as its repr
         return per_choice(values, lambda value: prefix + _json_value(value))
 
     return [fragments(key, values) for key, values in zip(plan.keys, plan.stored(), strict=True)]
@@ -272,13 +275,14 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
                 if on_item is not None:
                     on_item(Generated(index, choices, None, None, None, None, rejection))
                 continue
-            assignment = _assignment(fragments, choices)
+            spelled = template.spell_row(choices)
+            assignment = _assignment(fragments, choices, spelled)
             if renumber:
                 if assignment in held:
                     passed_over += 1
                     continue
                 index, next_index = next_index, next_index + 1
-            text = template.render(index, choices)
+            text = template.render(index, choices, spelled)
             data = text.encode("utf-8")
             path = f"{prefix}{index}{SUFFIX}"
             batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
@@ -305,5 +309,9 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     return GenerationResult(written, skipped, stopped, passed_over)
 
 
-def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...]) -> str:
-    return "{" + ", ".join(f[c] for f, c in zip(fragments, choices, strict=True)) + "}"
+def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...], spelled: list[str | None]) -> str:
+    """The stored assignment JSON of one row (``spelled``: the row's drawn numbers, see ``SceTemplate.spell_row``)."""
+    parts = []
+    for slot, choice, number in zip(fragments, choices, spelled, strict=True):
+        parts.append(slot[choice] if number is None else slot.prefix + number)  # type: ignore[attr-defined]
+    return "{" + ", ".join(parts) + "}"

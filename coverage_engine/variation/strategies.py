@@ -27,6 +27,7 @@ import itertools
 import json
 import math
 import random
+import warnings
 from array import array
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
@@ -88,24 +89,25 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     if options.samples is None:
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
     sizes = plan.sizes                     # choices per axis: the dimensions, then the documents if any
-    points = unit_points(options.strategy, options.samples, len(sizes), options.seed, options.blocks)
+    columns = unit_columns(options.strategy, options.samples, len(sizes), options.seed, options.blocks)
+    count = len(columns[0]) if columns else options.samples
     dimensions: list[Dimension] = list(plan.dimensions)
-    rows = [[0] * len(sizes) for _ in points]
-    for axis, size in enumerate(sizes):
+    choices: list[Sequence[int]] = []
+    for axis, (size, column) in enumerate(zip(sizes, columns, strict=True)):
         spec = dimensions[axis].continuous if axis < len(dimensions) else None
         if spec is not None:                # each point draws its own value: row i takes choice i
-            values = array("d", (spec.low + p[axis] * (spec.high - spec.low) for p in points))
+            low, span = spec.low, spec.high - spec.low
+            values = array("d", [low + p * span for p in column])
             dimensions[axis] = replace(dimensions[axis], choices=DrawnChoices(values, spec))
-            for i, row in enumerate(rows):
-                row[axis] = i
+            choices.append(range(count))
         else:                               # a discrete axis: the coordinate picks one of its values
-            for row, point in zip(rows, points, strict=True):
-                row[axis] = min(int(point[axis] * size), size - 1)
+            last = size - 1
+            choices.append([min(int(p * size), last) for p in column])
     plan.dimensions = dimensions
     plan.template = TextTemplate.build(plan.text, dimensions)
     plan.slots = _slots(dimensions, plan.documents)
     plan._bad = [set() for _ in plan.slots]
-    plan.rows = [tuple(r) for r in rows]
+    plan.rows = list(zip(*choices, strict=True)) if choices else [()] * count
 
 
 def continued(options: StrategyOptions, runs: Sequence[dict]) -> StrategyOptions:
@@ -197,40 +199,46 @@ def enough_samples(plan: VariationPlan, options: StrategyOptions, factor: int) -
         hint="widen the ranges, loosen the condition, or ask for fewer --samples")
 
 
-def unit_points(strategy: str, count: int, axes: int, seed: int,
-                blocks: Sequence[int] = ()) -> list[list[float]]:
-    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``).
+def unit_columns(strategy: str, count: int, axes: int, seed: int,
+                 blocks: Sequence[int] = ()) -> list[list[float]]:
+    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``), one list per axis.
 
     ``blocks`` (``lhs`` only): Latin hypercubes of these sizes one after the other (see :func:`continued`).
     """
     if strategy == "lhs" and blocks:
-        points: list[list[float]] = []
-        for number, size in enumerate(blocks):
-            points += unit_points("lhs", size, axes, seed if number == 0 else (seed * 1_000_003 + number) % 2**63)
-        if len(points) < count:
-            points += unit_points("lhs", count - len(points), axes, (seed * 1_000_003 + len(blocks)) % 2**63)
-        return points[:count]
+        columns: list[list[float]] = [[] for _ in range(axes)]
+        sizes = list(blocks) + [max(count - sum(blocks), 0)]
+        for number, size in enumerate(sizes):
+            if size:
+                block = unit_columns("lhs", size, axes, seed if number == 0 else (seed * 1_000_003 + number) % 2**63)
+                for column, part in zip(columns, block, strict=True):
+                    column += part
+        return [column[:count] for column in columns]
     rng = random.Random(seed)
-    if strategy == "random":
-        return [[rng.random() for _ in range(axes)] for _ in range(count)]
+    if strategy == "random":                # drawn point by point: axis a of point i is draw i * axes + a
+        draws = [rng.random() for _ in range(count * axes)]
+        return [draws[a::axes] for a in range(axes)]
     if strategy == "lhs":
         columns = []
         for _ in range(axes):
             strata = list(range(count))
             rng.shuffle(strata)
             columns.append([(s + rng.random()) / count for s in strata])
-        return [[columns[a][i] for a in range(axes)] for i in range(count)]
+        return columns
     if strategy == "halton":
         shift = [rng.random() for _ in range(axes)]
         primes = _primes(axes)
-        return [[(_radical_inverse(i + 1, primes[a]) + shift[a]) % 1.0 for a in range(axes)] for i in range(count)]
+        return [[(_radical_inverse(i + 1, primes[a]) + shift[a]) % 1.0 for i in range(count)] for a in range(axes)]
     if strategy == "sobol":
         try:
             from scipy.stats import qmc  # type: ignore[import-untyped, unused-ignore]
         except ImportError:
             raise StrategyError("--strategy sobol needs scipy: pip install 'scenario-coverage[sampling]'") from None
         sampler = qmc.Sobol(d=max(axes, 1), scramble=True, seed=seed)
-        return [list(map(float, p[:axes])) for p in sampler.random(count)]
+        with warnings.catch_warnings():     # "balance needs a power of 2": said in the summary line instead
+            warnings.simplefilter("ignore", UserWarning)
+            points = sampler.random(count)
+        return [[float(p) for p in points[:, a]] for a in range(axes)]
     raise StrategyError(f"unknown sampling strategy '{strategy}'")
 
 

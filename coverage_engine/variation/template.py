@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from coverage_engine.lazy import Mapped
+from coverage_engine.lazy import NumberTexts
 from coverage_engine.variation.dimensions import Dimension
 from coverage_engine.variation.drawn import DrawnChoices
 
@@ -62,8 +62,7 @@ def _replacements(dim: Dimension) -> Sequence[str]:
     """The replacement text of each choice; for drawn values formatted from the number when asked for."""
     choices = dim.choices
     if isinstance(choices, DrawnChoices):
-        head, unit = f"{dim.left} == ", choices.spec.unit
-        return Mapped(choices.values, lambda value: f"{head}{value!r}{unit}")
+        return NumberTexts(choices.values, f"{dim.left} == ", choices.spec.unit)
     return tuple(dim.replacement(i) for i in range(len(choices)))
 
 

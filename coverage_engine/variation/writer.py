@@ -112,6 +112,7 @@ class FileWriter:
 
     def _start(self) -> None:
         read_end, self._pipe = os.pipe()
+        _widen(self._pipe)
         ack_read, ack_write = os.pipe()
         sys.stdout.flush()
         sys.stderr.flush()
@@ -235,6 +236,17 @@ def _child_error(payload: bytes, status: int) -> OSError:
     if report.get("errno") is not None:
         return OSError(report["errno"], report.get("strerror") or report.get("text"), report.get("filename"))
     return OSError(report.get("text") or "the file writer process failed")
+
+
+def _widen(pipe: int) -> None:
+    """Let ``pipe`` hold a whole batch (Linux; 64 KiB otherwise), so the parent hands a batch over and
+    renders the next one while the child writes, instead of waiting for the child to read it."""
+    try:
+        import fcntl
+
+        fcntl.fcntl(pipe, fcntl.F_SETPIPE_SZ, _BATCH)
+    except (ImportError, AttributeError, OSError):  # another system, or a lower pipe-max-size
+        pass
 
 
 def _write_all(fd: int, data: bytes) -> None:

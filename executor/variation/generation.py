@@ -198,6 +198,9 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
                  + (f" ({tuples.impossible} impossible: they hold a value that does not resolve"
                     + (", or break a keep condition)" if plan.constraints is not None else ")")
                     if tuples.impossible else ""))
+    samples = request.samples or 0
+    if request.strategy == "sobol" and samples & (samples - 1):
+        text += f" (Sobol' points are balanced for a power of 2 samples, e.g. {1 << samples.bit_length()})"
     return text
 
 

@@ -53,6 +53,18 @@ def slot_sizes(plan: VariationPlan) -> str:
     return " x ".join(str(slot.count) for slot in plan.slots)
 
 
+def _space(plan: VariationPlan) -> str:
+    """What a strategy chose from: ``8 x 8 x 8 values``, or with drawn ranges ``400 points drawn in 2
+    range(s) x 7 x 3 values`` (a drawn range has as many values as points; their product means nothing)."""
+    drawn = [slot for slot in plan.slots
+             if any(d < len(plan.dimensions) and plan.dimensions[d].continuous is not None for d in slot.dims)]
+    if not drawn:
+        return f"{slot_sizes(plan)} values"
+    listed = " x ".join(str(slot.count) for slot in plan.slots if slot not in drawn)
+    points = f"{len(plan.dimensions[drawn[0].dims[0]].choices)} points drawn in {len(drawn)} range(s)"
+    return f"{points} x {listed} values" if listed else points
+
+
 #: Values of a dimension shown one by one; a longer dimension shows its first and last ones.
 SHOW_VALUES_UP_TO = 20
 
@@ -96,7 +108,7 @@ def describe(plan: VariationPlan) -> None:
     product = math.prod(plan.sizes)
     if plan.rows is not None and not (plan.excluded and plan.total + plan.excluded == product):
         excluded = f" ({plan.excluded} drawn broke a keep condition)" if plan.excluded else ""
-        echo(f"{plan.total} variants chosen from {slot_sizes(plan)} values{excluded}, {plan.resolutions} "
+        echo(f"{plan.total} variants chosen from {_space(plan)}{excluded}, {plan.resolutions} "
              "resolutions to check the values")
         return
     excluded = f"; {plan.excluded} break a keep condition" if plan.excluded else ""

@@ -93,3 +93,23 @@ def test_many_rows_are_fast_and_streamed(tmp_path):
     assert time.perf_counter() - started < 5
     assert count_rows(engine)["variants"] == n
     assert [v.index for v in find_variants(engine, {"s.v": 12345})] == [12345]
+
+
+def test_a_new_store_packs_variant_rows_in_8k_pages_and_an_old_one_keeps_its_pages(tmp_path):
+    import sqlite3
+
+    engine = open_engine(f"sqlite:///{tmp_path / 'new.db'}")
+    _record(engine, "/o")
+    engine.dispose()
+    with sqlite3.connect(tmp_path / "new.db") as conn:
+        assert conn.execute("PRAGMA page_size").fetchone()[0] == 8192
+    old = tmp_path / "old.db"                       # a store made before (4 KiB pages, WAL)
+    with sqlite3.connect(old) as conn:
+        conn.execute("PRAGMA journal_mode=WAL")
+        conn.execute("CREATE TABLE unrelated (x INTEGER)")
+    engine = open_engine(f"sqlite:///{old}")
+    _record(engine, "/o")
+    assert count_rows(engine)["variants"] == 6
+    engine.dispose()
+    with sqlite3.connect(old) as conn:
+        assert conn.execute("PRAGMA page_size").fetchone()[0] == 4096

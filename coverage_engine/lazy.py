@@ -54,7 +54,8 @@ class NumberTexts(Sequence[str]):
     """``prefix + spell(number) + suffix`` for each number of ``numbers`` (an ``array('d')``), on access.
 
     ``spell`` is ``repr`` unless given; a ``spell`` that is not ``repr`` must give ``repr(number)`` for
-    every number whose repr :func:`plain_number` accepts, so a renderer holding the repr may use it.
+    every number whose repr is a plain decimal (a dot, no exponent, not inf or nan: written the same
+    by ``repr``, JSON and YAML), so a renderer holding the repr may use it.
     """
 
     __slots__ = ("numbers", "prefix", "suffix", "spell")
@@ -80,12 +81,6 @@ class NumberTexts(Sequence[str]):
     def around(self, prefix: str, suffix: str) -> NumberTexts:
         """The same texts with ``prefix`` before and ``suffix`` after each."""
         return NumberTexts(self.numbers, prefix + self.prefix, self.suffix + suffix, self.spell)
-
-
-def plain_number(text: str) -> bool:
-    """Whether ``text`` (a float's repr) is a plain decimal: a dot, no exponent, not inf or nan —
-    written the same way by ``repr``, JSON and YAML."""
-    return "." in text and "e" not in text and "n" not in text
 
 
 def per_choice(values: Sequence[S], fn: Callable[[S], T]) -> Sequence[T]:

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
-from coverage_engine.lazy import NumberTexts, per_choice, plain_number
+from coverage_engine.lazy import NumberTexts, per_choice
 from coverage_engine.location import Location
 
 #: The format version this release writes.
@@ -228,6 +228,7 @@ class SceTemplate:
         self._drawn = [drawn_numbers([self._comments[i], self._entries[i]]
                                      + ([replacements[i]] if i < len(replacements) else []))
                        for i in range(len(keys))]
+        self._drawn_axes = [(axis, numbers) for axis, numbers in enumerate(self._drawn) if numbers is not None]
 
     def model_text(self, choices: tuple[int, ...] | list[int]) -> str:
         """The concrete ``.osc`` text for ``choices`` (not indented)."""
@@ -237,15 +238,16 @@ class SceTemplate:
 
     def spell_row(self, choices: tuple[int, ...] | list[int]) -> list[str | None]:
         """Per dimension, the ``repr`` of the drawn number ``choices`` picks, when it is a plain decimal
-        (see :func:`~coverage_engine.lazy.plain_number`); None for a listed dimension or another number.
+        (see :class:`~coverage_engine.lazy.NumberTexts`); None for a listed dimension or another number.
 
         :meth:`render` and the caller's other texts of the row (the stored assignment) share it: a
         drawn number is spelled once per variant, not once per text that shows it.
         """
-        spelled: list[str | None] = []
-        for numbers, choice in zip(self._drawn, choices, strict=False):
-            text = None if numbers is None else repr(numbers[choice])
-            spelled.append(text if text is not None and plain_number(text) else None)
+        spelled: list[str | None] = [None] * len(self._drawn)
+        for axis, numbers in self._drawn_axes:
+            text = repr(numbers[choices[axis]])
+            if "." in text and "e" not in text and "n" not in text:    # a plain decimal
+                spelled[axis] = text
         return spelled
 
     def render(self, index: int, choices: tuple[int, ...] | list[int],

@@ -93,10 +93,22 @@ def _normal(xml_text: str) -> bytes:
     return ET.tostring(root)
 
 
-def test_builtin_and_launched_runs_give_the_same_results(tmp_path):
+def cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+# -j 1 on a machine with a core to spare: each job goes to a spare child the server forked ahead and
+# warmed up on its own probe; -j 2 (on 2 cores): each job is forked when it is asked for.
+@pytest.mark.parametrize("slots", ["1", "2"], ids=["spare", "forked"])
+def test_builtin_and_launched_runs_give_the_same_results(tmp_path, slots):
+    if slots == "1" and cores() < 2:
+        pytest.skip("a warm spare needs a second core")
     names = [f"n{i}" for i in range(48)] + ["fail", "crash"]
     env = make_variants(tmp_path, names)
-    builtin = run_cli(["-i", "out", "-o", "builtin", "-j", "2"], tmp_path, env)
+    (tmp_path / "tmp").mkdir()
+    env["TMPDIR"] = str(tmp_path / "tmp")
+    builtin = run_cli(["-i", "out", "-o", "builtin", "-j", slots], tmp_path, env)
+    assert list((tmp_path / "tmp").iterdir()) == []            # nothing of a probe run is left behind
     launched = run_cli(["-i", "out", "-o", "launched", "-j", "2", "--", str(BIN / "scenario_execution"),
                         "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"], tmp_path, env)
     assert builtin.returncode == launched.returncode == 1, builtin.stdout + builtin.stderr
@@ -164,15 +176,16 @@ def _worker_id(store: Path) -> str:
     return row[0]
 
 
-@pytest.mark.parametrize("launched", [False, True], ids=["builtin", "launched"])
-def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, launched):
+@pytest.mark.parametrize(("launched", "slots"), [(False, "2"), (False, "1"), (True, "2")],
+                         ids=["builtin", "builtin-spare", "launched"])
+def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, launched, slots):
     names = [f"k{i}" for i in range(40)]
     env = make_variants(tmp_path, names, pause=0.3)
     command = ["--", str(BIN / "scenario_execution"), "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"] if launched \
         else []
-    runner = start_cli(["-i", "out", "-o", "res", "-j", "2", *command], tmp_path, env)
+    runner = start_cli(["-i", "out", "-o", "res", "-j", slots, *command], tmp_path, env)
     deadline = time.monotonic() + 60
-    while len(records(tmp_path)) < 6:
+    while len(records(tmp_path)) < (6 if slots == "2" else 3):
         assert time.monotonic() < deadline and runner.poll() is None, runner.stdout.read()
         time.sleep(0.02)
     mark = f"SCENARIO_BATCH_RUNNER={_worker_id(tmp_path / '.scenario_store.db')}"

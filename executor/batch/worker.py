@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError
+from executor.batch.builtin_runner import ForkServer, ForkServerError, spare_cores
 from executor.batch.job_run import Done, JobRun, Started, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
@@ -170,7 +170,8 @@ class Worker:
             if self._fork_server is not None:
                 self._fork_server.close()
                 self._fork_server = None
-            self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id}).start()
+            self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id},
+                                           keep_spare=spare_cores(self.settings.slots)).start()
         return self._fork_server
 
     def _loop(self) -> WorkerSummary:

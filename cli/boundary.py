@@ -13,7 +13,7 @@ shown only with ``-d/--debug``, which the shared option reports here while the c
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import NoReturn
 
 import click
@@ -62,8 +62,12 @@ class Boundary:
     def run(self, command: click.Command, args: Sequence[str] | None = None) -> int:
         """Run ``command``; returns its exit code (the callback's int, or the code of what escaped)."""
         argv = list(sys.argv[1:] if args is None else args)
+        return self.guarded(lambda: command.main(argv, prog_name=self.prog, standalone_mode=False, obj=self))
+
+    def guarded(self, call: Callable[[], object]) -> int:
+        """Run ``call`` (a command, or a command's callback with its options given) behind this boundary."""
         try:
-            code = command.main(argv, prog_name=self.prog, standalone_mode=False, obj=self)
+            code = call()
         except (click.exceptions.Abort, KeyboardInterrupt):
             self._say("interrupted")
             return EXIT_INTERRUPTED

@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
+from coverage_engine.files.sce_plain import load_plain
 from coverage_engine.lazy import NumberTexts, per_choice
 from coverage_engine.location import Location
 
@@ -447,7 +448,9 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     declared = _DECLARED_VERSION.match(text)
     if declared is not None and int(declared.group(1)) >= 2 and not _is_complete(text):
         raise _truncated(text, path)
-    data = _load_yaml(text, path)
+    data = load_plain(text)                 # the shape our writer gives, without YAML (None: anything else)
+    if data is None:
+        data = _load_yaml(text, path)
     where = Location(path, 1, 1)
     if not isinstance(data, dict):
         raise SceFormatError("not a .sce file: expected a YAML mapping with 'format_version' and 'model'", where)

@@ -71,18 +71,30 @@ def receive(sock: socket.socket, max_fds: int = 0) -> tuple[dict | None, list[in
 
 # ------------------------------------------------------------------------------ in the server
 
-def _entry_point():
-    """The ``main`` of the ``scenario_execution`` console script (found by name: this package never
-    imports the command layer) and the path of its script."""
-    import shutil
-    from importlib.metadata import entry_points
+class Command:
+    """The ``scenario_execution`` console script, found by name (this package never imports the
+    command layer): its ``main``, the path of its script, and its ``run_job(scenario, output_dir)``
+    when the command offers one (the same run without parsing the command line in every job)."""
 
-    name, group = ENTRY_POINT
-    found = [ep for ep in entry_points(group=group) if ep.name == name]
-    if not found:
-        raise RuntimeError(f"the console script {name!r} is not installed")
-    script = shutil.which(name) or os.path.join(os.path.dirname(sys.executable), name)
-    return found[0].load(), script
+    def __init__(self) -> None:
+        import shutil
+        from importlib.metadata import entry_points
+
+        name, group = ENTRY_POINT
+        found = [ep for ep in entry_points(group=group) if ep.name == name]
+        if not found:
+            raise RuntimeError(f"the console script {name!r} is not installed")
+        self.main = found[0].load()
+        self.job = getattr(sys.modules.get(self.main.__module__), "run_job", None)
+        self.script = shutil.which(name) or os.path.join(os.path.dirname(sys.executable), name)
+
+    def run(self, argv: list[str]) -> None:
+        """Run the command as ``argv`` (without the program name) asks; raises ``SystemExit`` like ``main``."""
+        sys.argv = [self.script, *argv]
+        if self.job is not None and len(argv) == 3 and argv[1] == "--output-dir":
+            self.job(argv[0], argv[2])
+        else:
+            self.main()
 
 
 #: A scenario importing every standard library, run once (as a ``.sce``) so that every module a run
@@ -97,7 +109,7 @@ def _probe_text() -> str:
     return render_sce("probe.osc", "0" * 64, ".", "probe", 0, {"probe.x": 1.0}, {"probe.x": "1.0"}, _PROBE)
 
 
-def run_probe(main, script: str, folder: str) -> None:
+def run_probe(command: Command, folder: str) -> None:
     """Run the command once on a probe variant of our own in ``folder``; raises if it fails.
 
     Only our own code runs: nothing from a scenario's folder or a plugin is imported here. What the
@@ -109,10 +121,9 @@ def run_probe(main, script: str, folder: str) -> None:
     probe = os.path.join(folder, "probe0.sce")
     with open(probe, "w", encoding="utf-8") as handle:
         handle.write(_probe_text())
-    sys.argv = [script, probe, "--output-dir", os.path.join(folder, "out")]
     sys.stdout = sys.stderr = io.StringIO()
     try:
-        main()
+        command.run([probe, "--output-dir", os.path.join(folder, "out")])
     except SystemExit as exc:
         if exc.code not in (0, None):
             raise RuntimeError(f"the probe run failed: {sys.stdout.getvalue()[-2000:]}") from None
@@ -121,14 +132,14 @@ def run_probe(main, script: str, folder: str) -> None:
         sys.stdout, sys.stderr = saved[2], saved[3]
 
 
-def preload(main, script: str) -> None:
+def preload(command: Command) -> None:
     """Run the probe once (every lazily imported module loaded, every library parsed), then freeze
     what was made."""
     import gc
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="scenario_fork_server_") as folder:
-        run_probe(main, script, folder)
+        run_probe(command, folder)
     gc.collect()
     gc.freeze()            # objects made so far are never scanned again, so the children do not copy them
 
@@ -187,9 +198,8 @@ def _run_child(request: dict, output_fd: int, server: _Server) -> None:
         os.chdir(request["cwd"] or ".")
         os.environ.update(request["env"])
         _fresh_stdio()
-        sys.argv = [server.script, *request["argv"][1:]]
         try:
-            server.main()
+            server.command.run(list(request["argv"][1:]))
             code = 0
         except SystemExit as exc:
             code = _exit_code(exc)
@@ -229,7 +239,7 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
         signal.signal(signal.SIGCHLD, signal.SIG_DFL)
         folder = tempfile.mkdtemp(prefix="spare_", dir=server.scratch)
         try:
-            run_probe(server.main, server.script, folder)
+            run_probe(server.command, folder)
         except Exception:  # noqa: BLE001, S110 - warming up is best effort; the job runs all the same
             pass
         finally:
@@ -255,7 +265,7 @@ class _Server:
         self.wake_read, self.wake_write = os.pipe()
         os.set_blocking(self.wake_write, False)
         os.set_blocking(self.wake_read, False)
-        self.main, self.script = _entry_point()
+        self.command = Command()
 
     def serve(self) -> None:
         signal.signal(signal.SIGCHLD, lambda *_: None)
@@ -383,7 +393,7 @@ def serve(fd: int, keep_spare: bool = False) -> None:
     sock = socket.socket(fileno=fd)
     try:
         server = _Server(sock, keep_spare)
-        preload(server.main, server.script)
+        preload(server.command)
     except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
         send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
         raise SystemExit(1) from None

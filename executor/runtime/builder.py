@@ -10,8 +10,10 @@ is invoked (:class:`ActionRuntimeError`), the way a failing ``__init__`` does.
 
 from __future__ import annotations
 
+import functools
 import inspect
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 import py_trees
 from py_trees.common import ParallelPolicy
@@ -104,19 +106,33 @@ def _build(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behav
 # Actions
 
 
-def _parameters(function) -> tuple[dict[str, inspect.Parameter], bool]:
-    """Named parameters of ``function`` (without self) and whether it takes ``**kwargs``."""
+def _parameters(function) -> tuple[Mapping[str, inspect.Parameter], bool]:
+    """Named parameters of ``function`` (without self) and whether it takes ``**kwargs``.
+
+    Known per function (a bound method by its function): ``inspect.signature`` is the costly part of
+    making an action, and every action of a class has the same signature.
+    """
+    unbound = getattr(function, "__func__", None)
+    return _signature_parameters(unbound, True) if unbound is not None else _signature_parameters(function, False)
+
+
+@functools.lru_cache(maxsize=1024)
+def _signature_parameters(function, bound: bool) -> tuple[Mapping[str, inspect.Parameter], bool]:
     try:
         signature = inspect.signature(function)
     except (TypeError, ValueError):
-        return {}, True
+        return MappingProxyType({}), True
+    parameters = list(signature.parameters.values())
+    if bound and parameters and parameters[0].kind in (inspect.Parameter.POSITIONAL_ONLY,
+                                                       inspect.Parameter.POSITIONAL_OR_KEYWORD):
+        parameters = parameters[1:]           # what the bound method's own signature leaves out
     named, var_keyword = {}, False
-    for parameter in signature.parameters.values():
+    for parameter in parameters:
         if parameter.kind is inspect.Parameter.VAR_KEYWORD:
             var_keyword = True
         elif parameter.kind is not inspect.Parameter.VAR_POSITIONAL and parameter.name != "self":
             named[parameter.name] = parameter
-    return named, var_keyword
+    return MappingProxyType(named), var_keyword
 
 
 def make_action(call: ActionCall, context: ScenarioContext) -> py_trees.behaviour.Behaviour:

@@ -50,33 +50,20 @@ class Mapped(Sequence[T]):
         return Mapped(self._source, lambda item: fn(first(item)))
 
 
-class NumberTexts(Sequence[str]):
+class NumberTexts(Mapped[str]):
     """``prefix + spell(number) + suffix`` for each number of ``numbers`` (an ``array('d')``), on access.
 
     ``spell`` is ``repr`` unless given; a ``spell`` that is not ``repr`` must give ``repr(number)`` for
     every number whose repr is a plain decimal (a dot, no exponent, not inf or nan: written the same
-    by ``repr``, JSON and YAML), so a renderer holding the repr may use it.
+    by ``repr``, JSON and YAML), so a renderer holding the repr may use it: the parts are attributes.
     """
 
     __slots__ = ("numbers", "prefix", "suffix", "spell")
 
     def __init__(self, numbers: Sequence[float], prefix: str = "", suffix: str = "",
                  spell: Callable[[float], str] = repr) -> None:
+        super().__init__(numbers, lambda number: prefix + spell(number) + suffix)
         self.numbers, self.prefix, self.suffix, self.spell = numbers, prefix, suffix, spell
-
-    def __len__(self) -> int:
-        return len(self.numbers)
-
-    @overload
-    def __getitem__(self, index: int) -> str: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> list[str]: ...
-
-    def __getitem__(self, index: Any) -> Any:
-        if isinstance(index, slice):
-            return [self.prefix + self.spell(number) + self.suffix for number in self.numbers[index]]
-        return self.prefix + self.spell(self.numbers[index]) + self.suffix
 
     def around(self, prefix: str, suffix: str) -> NumberTexts:
         """The same texts with ``prefix`` before and ``suffix`` after each."""

@@ -6,7 +6,7 @@ Never another exception, never a hang: each input is bounded in time by hypothes
 from __future__ import annotations
 
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from text_mutations import mutated
 
 from coverage_engine.errors import OscError
 from coverage_engine.files.parameters import read_parameter_documents
@@ -18,20 +18,8 @@ PARAMETERS = ["s:\n  v: 2\n", "s:\n  v: 2\n---\ns:\n  v: [1, 2]\n", "a: &x {v: 1
 PIECES = ["\n", ":", "-", "---", "&a", "*a", "[", "]", "{", "}", "'", '"', "\t", "\x00", "\ufeff", "!!python/object", "%"]
 
 
-@st.composite
-def mutated(draw, sources):
-    text = draw(st.sampled_from(sources))
-    for _ in range(draw(st.integers(1, 4))):
-        at = draw(st.integers(0, len(text)))
-        if draw(st.booleans()):
-            text = text[:at] + draw(st.sampled_from(PIECES)) + text[at:]
-        else:
-            text = text[:at] + text[at + draw(st.integers(1, 5)):]
-    return text
-
-
 @settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(text=mutated(PARAMETERS))
+@given(text=mutated(PARAMETERS, PIECES))
 def test_parameter_files_load_or_fail_with_our_error(tmp_path, text):
     path = tmp_path / "p.yaml"
     path.write_text(text, encoding="utf-8")
@@ -44,7 +32,7 @@ def test_parameter_files_load_or_fail_with_our_error(tmp_path, text):
 
 
 @settings(max_examples=150, deadline=2000)
-@given(text=mutated(SCE))
+@given(text=mutated(SCE, PIECES))
 def test_sce_texts_load_or_fail_with_our_error(text):
     try:
         document = parse_sce(text, "/tmp/v.sce")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import yaml
 from hypothesis import given, settings
-from hypothesis import strategies as st
+from text_mutations import mutated
 
 from coverage_engine.files.sce import parse_sce, render_sce
 from coverage_engine.files.sce_plain import load_plain
@@ -64,19 +64,7 @@ PIECES = ["\n", ": ", "  ", " ", "#", '"', "\\", "\t", "\r", "|", "|2", "{}", "0
           "model: |2\n", "assignment:\n", '  "k": 1\n', "\n  x\n"]
 
 
-@st.composite
-def mutated(draw):
-    text = draw(st.sampled_from(sce_texts()))
-    for _ in range(draw(st.integers(1, 4))):
-        at = draw(st.integers(0, len(text)))
-        if draw(st.booleans()):
-            text = text[:at] + draw(st.sampled_from(PIECES)) + text[at:]
-        else:
-            text = text[:at] + text[at + draw(st.integers(1, 6)):]
-    return text
-
-
 @settings(max_examples=400, deadline=2000)
-@given(text=mutated())
+@given(text=mutated(sce_texts(), PIECES))
 def test_any_text_is_read_as_yaml_reads_it_or_left_to_yaml(text):
     same_as_yaml(text)

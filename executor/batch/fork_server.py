@@ -12,9 +12,9 @@ not an interpreter start, and its files, output and exit status are those of the
 When the runner has a core to spare (fewer job slots than cores), the server also keeps one *spare*
 child: forked ahead of time, it runs the same probe the server ran at start (our own scenario, never
 a user's) and then waits for a job. The probe makes the spare copy the memory pages a run writes
-(Python writes reference counts into every object it touches, so a fresh fork copies about 1,500
-pages: 5 ms), while the previous job still runs on the other core; the job handed to it then
-starts on warm pages. Measured: a job's run 3.8 ms instead of 9.4 ms. With every core busy a spare
+(Python writes reference counts into every object it touches, so a fresh fork copies over a
+thousand pages: 4-5 ms), while the previous job still runs on the other core; the job handed to it
+then starts on warm pages. Measured: a job's run 3.8 ms instead of 9.4 ms. With every core busy a spare
 only adds the probe's work, so the server keeps none.
 
 Nothing of a scenario ever runs in the server: plugins, external methods and the scenario folder's

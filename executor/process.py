@@ -141,7 +141,6 @@ class ChildProcess:
         self.extra_env = dict(environment or {})
         if marker is not None:
             self.extra_env[JOB_ENV] = marker
-        self.env = {**os.environ, **self.extra_env} if self.extra_env else None
         self.proc: subprocess.Popen[bytes] | None = None
         self._lock = threading.Lock()
         self._timers: list[threading.Timer] = []
@@ -181,7 +180,8 @@ class ChildProcess:
         return subprocess.Popen(
             self.argv, cwd=self.cwd, stdin=stdin, stdout=stdout,
             stderr=None if stdout is None else subprocess.STDOUT,
-            env=self.env, start_new_session=True, close_fds=True)
+            env={**os.environ, **self.extra_env} if self.extra_env else None,  # (a fork inherits os.environ)
+            start_new_session=True, close_fds=True)
 
     def _fork(self, log):
         """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""

@@ -86,8 +86,9 @@ def run_job(scenario: str, output_dir: str) -> NoReturn:
     if _job_options is None:
         parsed = command.make_context("scenario_execution", [scenario, "--output-dir", output_dir], obj=boundary)
         _job_options = {k: v for k, v in parsed.params.items() if k not in ("scenario", "output_dir")}
-    options = _job_options
-    sys.exit(boundary.guarded(lambda: command.callback(scenario=scenario, output_dir=output_dir, **options)))
+    options, callback = _job_options, command.callback
+    assert callback is not None                  # the decorated function above
+    sys.exit(boundary.guarded(lambda: callback(scenario=scenario, output_dir=output_dir, **options)))
 
 
 if __name__ == "__main__":

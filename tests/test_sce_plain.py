@@ -60,8 +60,19 @@ def test_files_as_written_are_read_the_short_way_with_yaml_s_meaning():
     assert document.text.endswith("log('x  #  y')\n") and document.assignment == {"s.v": "a", "s.w": 1}
 
 
+def test_near_misses_of_our_shape_are_left_to_yaml():
+    # each is read by YAML another way than a line-by-line reading would suggest
+    for text in ("format_version: 1\nassignment:\nmodel: |2\n  x\n# end\n",   # assignment is null
+                 "format_version: 1\nmodel: |2\n  x",                         # no last line break
+                 "format_version: 1\nyes: 1\nmodel: |2\n  x\n# end\n",        # the key is True
+                 "format_version: 1\nnull: 1\nmodel: |2\n  x\n# end\n",
+                 "format_version: 1\n1_0: 1\nmodel: |2\n  x\n# end\n"):
+        assert load_plain(text) is None, text
+        same_as_yaml(text)
+
+
 PIECES = ["\n", ": ", "  ", " ", "#", '"', "\\", "\t", "\r", "|", "|2", "{}", "0", "1.", "e5", "true", "~", "\x85",
-          "model: |2\n", "assignment:\n", '  "k": 1\n', "\n  x\n"]
+          "model: |2\n", "assignment:\n", '  "k": 1\n', "\n  x\n", "yes: 1\n", "null", "1_0"]
 
 
 @settings(max_examples=400, deadline=2000)

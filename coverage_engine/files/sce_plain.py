@@ -26,6 +26,8 @@ _FLOAT = re.compile(r"-?[0-9]+\.[0-9]+")
 #: (CR, NEL, LS, PS), a byte order mark, characters it does not accept.
 _SPECIAL = re.compile("[^\t\n\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|[\x85\u2028\u2029\ufeff]")
 _NOT_SURE = object()
+#: The keys our writer gives a file (YAML 1.1 reads ``yes``, ``null`` or ``1_0`` as keys of other types).
+_KEYS = ("format_version", "source", "source_sha256", "source_dir", "scenario", "index", "assignment", "model")
 
 
 def _scalar(text: str) -> object:
@@ -61,7 +63,7 @@ def load_plain(text: str) -> dict | None:
                 key, rest = "assignment", ""
             else:
                 return None
-        if key in data or not key.replace("_", "").isalnum():
+        if key in data or key not in _KEYS:
             return None
         if key == "model":
             if rest != "|2":
@@ -86,6 +88,8 @@ def load_plain(text: str) -> dict | None:
                     return None
                 assignment[match.group(1)] = scalar
                 position += 1
+            if not assignment:
+                return None                   # "assignment:" alone is null to YAML (and refused)
             data[key] = assignment
             continue
         scalar = _scalar(rest)
@@ -110,6 +114,10 @@ def _literal_block(lines: list[str], position: int) -> tuple[str | None, int]:
         else:
             return None, position
         position += 1
+    else:
+        # The text ends inside the block: YAML keeps a missing last line break missing. Our files
+        # close the block with their end line; anything else is YAML's to read.
+        return None, position
     while content and content[-1] == "":
         content.pop()
     return ("\n".join(content) + "\n" if content else ""), position

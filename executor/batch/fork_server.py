@@ -183,8 +183,12 @@ def _exit_code(exc: SystemExit) -> int:
     return 1
 
 
-def _run_child(request: dict, output_fd: int, server: _Server) -> None:
-    """In the forked child: become the launched command, run it, never return."""
+def _run_child(request: dict, output_fd: int, server: _Server, held_back: bool = False) -> None:
+    """In the forked child: become the launched command, run it, never return.
+
+    ``held_back``: a spare's stop signals are blocked; they are let through once the command runs
+    (one that came meanwhile is delivered then, as if it came at the job's first instruction).
+    """
     code = 1
     try:
         if os.getpgid(0) != os.getpid():     # a spare made its own session already
@@ -206,6 +210,8 @@ def _run_child(request: dict, output_fd: int, server: _Server) -> None:
         os.environ.update(request["env"])
         _fresh_stdio()
         try:
+            if held_back:
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_BACK)
             server.command.run(list(request["argv"][1:]))
             code = 0
         except SystemExit as exc:
@@ -234,6 +240,11 @@ class _Spare:
         self.pid, self.sock = pid, sock
 
 
+#: Signals a spare holds back while it warms up: a cancel or timeout sent to the job handed to it
+#: reaches the job as soon as it starts (the probe must neither swallow nor die of them).
+_HELD_BACK = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT}
+
+
 def _run_spare(sock: socket.socket, server: _Server) -> None:
     """In a spare child: warm up on the probe, wait for a job, run it (never returns)."""
     import shutil
@@ -243,21 +254,25 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
         os.setsid()                       # its own group from the start: the job's, and killable as one
         server.close_in_child()
         signal.set_wakeup_fd(-1)
-        signal.signal(signal.SIGCHLD, signal.SIG_DFL)
-        folder = tempfile.mkdtemp(prefix="spare_", dir=server.scratch)
+        signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_BACK)
+        for sig in (*_HELD_BACK, signal.SIGCHLD):
+            signal.signal(sig, signal.SIG_DFL)   # held back, not ignored: an ignored signal is lost
+        folder = None
         try:
+            folder = tempfile.mkdtemp(prefix="spare_", dir=server.scratch)
             run_probe(server.command, folder)
         except Exception:  # noqa: BLE001, S110 - warming up is best effort; the job runs all the same
             pass
         finally:
-            shutil.rmtree(folder, ignore_errors=True)
+            if folder is not None:
+                shutil.rmtree(folder, ignore_errors=True)
         request, fds = receive(sock, max_fds=1)
     except BaseException:  # noqa: BLE001 - a spare that cannot wait for a job just ends
         os._exit(1)
     sock.close()
     if request is None or len(fds) != 1:
         os._exit(0)                       # the server ended (or sent no output): nothing to run
-    _run_child(request, fds[0], server)
+    _run_child(request, fds[0], server, held_back=True)
 
 
 class _Server:
@@ -299,21 +314,32 @@ class _Server:
                     self._spawn(message, fds)
                 self._reap()
         finally:
-            spare = [self.spare.pid] if self.spare is not None else []
-            for pid in [*self.children, *spare]:     # the runner is gone: so are its jobs
-                try:
-                    os.killpg(pid, signal.SIGKILL)
-                except OSError:
-                    pass
-            if self.scratch is not None:             # a spare killed while warming up leaves its probe run
-                for pid in spare:
-                    try:
-                        os.waitpid(pid, 0)
-                    except ChildProcessError:
-                        pass
-                import shutil
+            self._end_children()
 
-                shutil.rmtree(self.scratch, ignore_errors=True)
+    def _end_children(self) -> None:
+        """The runner is gone: so are its jobs, and the spare (which may not have its own group yet)."""
+        spare = self.spare
+        for pid in self.children:
+            try:
+                os.killpg(pid, signal.SIGKILL)
+            except OSError:
+                pass
+        if spare is None:
+            return
+        spare.sock.close()                       # a spare still warming up finds no job and ends
+        for kill in (os.killpg, os.kill):
+            try:
+                kill(spare.pid, signal.SIGKILL)
+            except OSError:
+                pass
+        try:
+            os.waitpid(spare.pid, 0)
+        except ChildProcessError:
+            pass
+        if self.scratch is not None:             # a spare killed while warming up leaves its probe run
+            import shutil
+
+            shutil.rmtree(self.scratch, ignore_errors=True)
 
     def _spawn(self, request: dict, fds: list[int]) -> None:
         if len(fds) != 1:

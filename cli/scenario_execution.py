@@ -112,3 +112,7 @@ def _invoke_job(boundary: Boundary, scenario: str, output_dir: str) -> object:
             pacify: Any = getattr(click_utils, "PacifyFlushWrapper")  # noqa: B009 - untyped in click
             sys.stdout, sys.stderr = pacify(sys.stdout), pacify(sys.stderr)
             sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

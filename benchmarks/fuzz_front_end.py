@@ -81,7 +81,7 @@ def main() -> None:
     sources = [p.read_text(encoding="utf-8") for p in sorted((ROOT / "coverage_engine" / "osc").glob("*.osc"))]
     sources += [p.read_text(encoding="utf-8") for p in sorted((ROOT / "examples").rglob("*.osc"))
                 if "build" not in p.parts]
-    from coverage_engine.files.sce import render_sce
+    from coverage_engine.files.sce_writer import render_sce
 
     model = "import osc.helpers\nscenario s:\n    do serial:\n        log('x')\n"
     sce_texts = [render_sce("s.osc", "0" * 64, ".", "s", i, {"s.log.msg": value}, {}, model)

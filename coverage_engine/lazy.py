@@ -70,6 +70,13 @@ class NumberTexts(Mapped[str]):
         return NumberTexts(self.numbers, prefix + self.prefix, self.suffix + suffix, self.spell)
 
 
+def row_texts(slots: Sequence[Sequence[str]], choices: Sequence[int], spelled: Sequence[str | None]) -> list[str]:
+    """Each slot's text for its choice in one row; where ``spelled`` holds the number's repr (the slot
+    is then a :class:`NumberTexts`), the text is put together from it instead of spelling it again."""
+    return [slot[choice] if number is None else slot.prefix + number + slot.suffix  # type: ignore[attr-defined]
+            for slot, choice, number in zip(slots, choices, spelled, strict=False)]
+
+
 def per_choice(values: Sequence[S], fn: Callable[[S], T]) -> Sequence[T]:
     """``fn`` of each value: a lazy view over a long sequence that is itself computed or compact (a
     :class:`Mapped`, an ``array``, a ``range``), a tuple over anything else."""

@@ -10,7 +10,8 @@ from text_mutations import mutated
 
 from coverage_engine.errors import OscError
 from coverage_engine.files.parameters import read_parameter_documents
-from coverage_engine.files.sce import parse_sce, render_sce
+from coverage_engine.files.sce import parse_sce
+from coverage_engine.files.sce_writer import render_sce
 
 MODEL = "import osc.helpers\nscenario s:\n    do serial:\n        log('x')\n"
 SCE = [render_sce("s.osc", "0" * 64, ".", "s", i, {"s.log.msg": v}, {}, MODEL) for i, v in enumerate(["a", 2.5])]

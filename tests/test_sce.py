@@ -7,14 +7,8 @@ from pathlib import Path
 import pytest
 
 from coverage_engine.errors import SceFormatError
-from coverage_engine.files.sce import (
-    SCE_FORMAT_VERSION,
-    SceTemplate,
-    parse_sce,
-    read_sce,
-    relative_source_dir,
-    render_sce,
-)
+from coverage_engine.files.sce import SCE_FORMAT_VERSION, parse_sce, read_sce
+from coverage_engine.files.sce_writer import SceTemplate, relative_source_dir, render_sce
 
 OSC = """import osc.helpers
 

@@ -11,8 +11,9 @@ import yaml
 from hypothesis import given, settings
 from text_mutations import mutated
 
-from coverage_engine.files.sce import parse_sce, render_sce
+from coverage_engine.files.sce import parse_sce
 from coverage_engine.files.sce_plain import load_plain
+from coverage_engine.files.sce_writer import render_sce
 
 MODEL = ("\n\nimport osc.helpers\n\nscenario s:\n    v: float = 1.0 with:\n        keep(it == 2.5)\n"
          "    do serial:\n        log('x  #  y')\n\n\n")

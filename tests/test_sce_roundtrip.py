@@ -14,7 +14,8 @@ from pathlib import Path
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from coverage_engine.files.sce import SceTemplate, parse_sce, render_sce
+from coverage_engine.files.sce import parse_sce
+from coverage_engine.files.sce_writer import SceTemplate, render_sce
 
 BIN = Path(sys.executable).parent
 

@@ -23,8 +23,9 @@ _INT = re.compile(r"-?(?:0|[1-9][0-9]*)")
 #: Floats as we write them: a plain decimal (an exponent or ``.inf`` goes to YAML).
 _FLOAT = re.compile(r"-?[0-9]+\.[0-9]+")
 #: What YAML reads differently from plain text anywhere in a file: line breaks other than ``\n``
-#: (CR, NEL, LS, PS), a byte order mark, characters it does not accept.
-_SPECIAL = re.compile("[^\t\n\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|[\x85\u2028\u2029\ufeff]")
+#: (CR, NEL, LS, PS), a byte order mark, characters it does not accept. (The writer keeps a model
+#: holding any of them out of a literal block.)
+YAML_SPECIAL = re.compile("[^\t\n\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]|[\x85\u2028\u2029\ufeff]")
 _NOT_SURE = object()
 #: The keys our writer gives a file (YAML 1.1 reads ``yes``, ``null`` or ``1_0`` as keys of other types).
 _KEYS = ("format_version", "source", "source_sha256", "source_dir", "scenario", "index", "assignment", "model")
@@ -47,7 +48,7 @@ def _scalar(text: str) -> object:
 def load_plain(text: str) -> dict | None:
     """The mapping YAML would read from ``text``, when ``text`` has the shape our writer gives a
     ``.sce``; None otherwise (read it with YAML)."""
-    if _SPECIAL.search(text) is not None:
+    if YAML_SPECIAL.search(text) is not None:
         return None
     lines = text.split("\n")
     data: dict = {}

@@ -19,8 +19,9 @@ from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from coverage_engine.files.sce import SceTemplate, is_sce_text, relative_source_dir
-from coverage_engine.lazy import NumberTexts, per_choice
+from coverage_engine.files.sce import is_sce_text
+from coverage_engine.files.sce_writer import SceTemplate, relative_source_dir
+from coverage_engine.lazy import NumberTexts, per_choice, row_texts
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
 
@@ -311,7 +312,4 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
 
 def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...], spelled: list[str | None]) -> str:
     """The stored assignment JSON of one row (``spelled``: the row's drawn numbers, see ``SceTemplate.spell_row``)."""
-    parts = []
-    for slot, choice, number in zip(fragments, choices, spelled, strict=True):
-        parts.append(slot[choice] if number is None else slot.prefix + number)  # type: ignore[attr-defined]
-    return "{" + ", ".join(parts) + "}"
+    return "{" + ", ".join(row_texts(fragments, choices, spelled)) + "}"

@@ -104,7 +104,7 @@ _PROBE = ("import osc.types\nimport osc.helpers\nimport osc.standard\nimport osc
 
 
 def _probe_text() -> str:
-    from coverage_engine.files.sce import render_sce
+    from coverage_engine.files.sce_writer import render_sce
 
     return render_sce("probe.osc", "0" * 64, ".", "probe", 0, {"probe.x": 1.0}, {"probe.x": "1.0"}, _PROBE)
 

@@ -98,3 +98,18 @@ def test_a_result_that_is_a_link_to_a_secret_is_never_read(tmp_path):
     report = (tmp_path / "results" / "test.xml").read_text()
     assert "TOPSECRET" not in report and "TOPSECRET" not in done.stdout + done.stderr
     assert "test.xml is a symbolic link: not followed" in report
+
+
+def test_a_file_planted_where_a_job_folder_goes_is_left_alone_and_the_rest_runs(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"filed": "xml=pass", "fine": "xml=pass"})
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "filed").write_text("not a folder\n")
+    done = run_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "Traceback" not in done.stderr
+    assert (tmp_path / "results" / "filed").read_text() == "not a folder\n"
+    cases = {c.get("name"): c for c in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testcase")}
+    assert cases["fine"].find("error") is None and cases["fine"].find("failure") is None
+    filed = cases["filed"].find("error")
+    assert filed is not None and "exists and is not a folder" in filed.get("message")

@@ -38,6 +38,8 @@ class Started:
 
     run: JobRun
     pid: int
+    #: When the child started (``time.monotonic``): the worker writes the record only once it is this old.
+    at: float = field(default_factory=time.monotonic)
 
 
 @dataclass

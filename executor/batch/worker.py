@@ -9,9 +9,11 @@ because of a lost connection. The single-host run is this loop scoped to one bat
 from __future__ import annotations
 
 import functools
+import gc
 import hashlib
 import os
 import queue
+import stat
 import threading
 import time
 from collections import Counter, deque
@@ -39,20 +41,44 @@ _TICK = 0.2
 #: After a stop, how long to keep trying to write results to an unreachable store before giving up.
 _GIVE_UP_AFTER_STOP = 30.0
 
+#: Seconds a job's child runs before its process id is written to the store. A short job ends sooner:
+#: its result is then written alone (one transaction per job instead of two). The record serves to
+#: end the child of a runner that died together with its watchdog, which matters for long jobs.
+STARTED_RECORD_AFTER = 0.1
 
-def prepare_job_folder(root: Path, folder: Path) -> None:
+
+def prepare_job_folder(root: Path, folder: Path, real_root: str | None = None) -> None:
     """Create a job's folder under the output root, refusing one that leads elsewhere.
 
     A symbolic link planted where a job's folder goes (``results/cut4 -> /home/me``) would make the
     job write its log and results through it; so would a link among the root's own subfolders. The
     folder must be a real directory whose real path lies inside the root's real path.
+
+    ``real_root``: the root's real path, when the caller resolved it already (once per batch). A folder
+    right inside the root then needs no path resolution: being a real directory (not a link) in the
+    root, its real path is inside the root's.
     """
-    root.mkdir(parents=True, exist_ok=True)
+    if real_root is None:
+        root.mkdir(parents=True, exist_ok=True)
+        real_root = os.path.realpath(root)
+    if folder.parent == root and folder.name not in ("", ".", ".."):
+        try:
+            os.mkdir(folder)
+        except FileExistsError:
+            pass
+        except FileNotFoundError:         # the root went away meanwhile: make it again
+            root.mkdir(parents=True, exist_ok=True)
+            folder.mkdir(exist_ok=True)
+        if stat.S_ISLNK(os.lstat(folder).st_mode):
+            raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
+        if not folder.is_dir():
+            raise FileExistsError(f"the job folder {folder} exists and is not a folder")
+        return
     if folder.is_symlink():
         raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
     folder.mkdir(parents=True, exist_ok=True)
     real = folder.resolve()
-    if not real.is_relative_to(root.resolve()):
+    if not real.is_relative_to(real_root):
         raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
 
 
@@ -128,6 +154,8 @@ class Worker:
         self._started = 0
         self._unsure_claims = False
         self._fork_server: ForkServer | None = None
+        self._real_roots: dict[str, str] = {}    # output root -> its real path (see prepare_job_folder)
+        self._started_due: float | None = None   # when the oldest held start record is to be written
 
     # ------------------------------------------------------------------ control
     def stop(self, force: bool = False) -> None:
@@ -144,6 +172,8 @@ class Worker:
         this process die (``kill -9``), its watchdog ends every process it started.
         """
         watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
+        gc.collect()
+        gc.freeze()      # what exists now (imports, the batch) is never scanned again: collections stay short
         try:
             return self._loop()
         except BaseException:
@@ -277,7 +307,7 @@ class Worker:
         problem: str | None = None
         full_disk = False                   # the problem is a full disk: the job is stopped, not judged
         try:
-            prepare_job_folder(root, output_dir)
+            prepare_job_folder(root, output_dir, self._real_root(root))
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
@@ -308,6 +338,15 @@ class Worker:
         ended = time.time()
         self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
                               else launch_failure(output_dir, began, ended, problem)))
+
+    def _real_root(self, root: Path) -> str:
+        """The real path of an output root, created and resolved once per run of the loop."""
+        key = str(root)
+        real = self._real_roots.get(key)
+        if real is None:
+            root.mkdir(parents=True, exist_ok=True)
+            real = self._real_roots[key] = os.path.realpath(root)
+        return real
 
     def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
         """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""
@@ -376,22 +415,42 @@ class Worker:
         if self._claim_more and not self._stop.is_set() and len(self._runs) < self.settings.slots \
                 and time.monotonic() >= self._retry_at:
             timeout = 0.0
+        if self._started_due is not None:         # wake when a held start record is due (and may be written)
+            due = max(self._started_due, self._retry_at)
+            timeout = max(0.0, min(timeout, due - time.monotonic()))
         try:
             event = self._events.get(timeout=timeout) if timeout else self._events.get_nowait()
         except queue.Empty:
             return
-        self._pending.append(event)
+        self._add(event)
         while True:
             try:
-                self._pending.append(self._events.get_nowait())
+                self._add(self._events.get_nowait())
             except queue.Empty:
                 break
 
+    def _add(self, event: Started | Done) -> None:
+        """Queue a store write; a job's result makes the not yet written record of its start pointless."""
+        if isinstance(event, Done) and any(isinstance(e, Started) and e.run is event.run for e in self._pending):
+            self._pending = deque(e for e in self._pending if not (isinstance(e, Started) and e.run is event.run))
+        self._pending.append(event)
+
     def _flush(self) -> None:
-        while self._pending:
-            if self._guard(lambda: self._write(self._pending[0])) is None:
-                return
-            self._pending.popleft()
+        held: list[Started] = []                # starts too recent to record yet (see STARTED_RECORD_AFTER)
+        now = time.monotonic()
+        try:
+            while self._pending:
+                event = self._pending[0]
+                if isinstance(event, Started) and now - event.at < STARTED_RECORD_AFTER \
+                        and not self._stop.is_set():
+                    held.append(self._pending.popleft())
+                    continue
+                if self._guard(functools.partial(self._write, event)) is None:
+                    return
+                self._pending.popleft()
+        finally:
+            self._pending.extendleft(reversed(held))
+            self._started_due = min(e.at for e in held) + STARTED_RECORD_AFTER if held else None
         while self._to_halt:
             batch_id = min(self._to_halt)
             if self._guard(functools.partial(self._halt, batch_id)) is None:

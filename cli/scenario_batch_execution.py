@@ -29,7 +29,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"]}
 
 
 class JobsType(click.ParamType):
-    """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs."""
+    """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs this process may use."""
 
     name = "N|auto"
 
@@ -37,7 +37,9 @@ class JobsType(click.ParamType):
         if isinstance(value, int):
             return value
         if str(value).lower() == "auto":
-            return os.cpu_count() or 1
+            from executor.batch.builtin_runner import usable_cpus
+
+            return usable_cpus()
         try:
             number = int(value)
         except ValueError:
@@ -115,7 +117,7 @@ def _check_post_run(hooks) -> None:
 @click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
               help="Output folder: <out>/<scenario>/ per job and the merged <out>/test.xml.")
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
-              help="Jobs run in parallel ('auto': one per CPU).")
+              help="Jobs run in parallel ('auto': one per usable CPU).")
 @click.option("--timeout", type=Seconds(), metavar="S",
               help="Seconds a job may run, counted from its process's start (start-up included); then its "
                    "process group gets SIGTERM, then SIGKILL after --grace.")
@@ -231,7 +233,7 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
 @click.command(context_settings=CONTEXT)
 @store_option
 @click.option("-j", "--jobs", "slots", type=JobsType(), default="1", show_default=True,
-              help="Jobs this worker runs in parallel ('auto': one per CPU).")
+              help="Jobs this worker runs in parallel ('auto': one per usable CPU).")
 @click.option("--batch", "batch_id", type=int, help="Only this batch (default: every shared batch).")
 @click.option("-o", "--output-dir", "--output-root", "output_root", type=click.Path(file_okay=False),
               help="Put job folders here instead of the batch's output folder (-o means the output folder, as "

@@ -3,6 +3,10 @@ misspelt subcommands and --version (issues 22 and 17)."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
@@ -73,3 +77,17 @@ def test_every_command_says_its_version(tmp_path):
     for name in ("scenario_execution", "scenario_variation", "scenario_batch_execution", "scenario_coverage"):
         done = subprocess.run([str(Path(sys.executable).parent / name), "--version"], capture_output=True, text=True)
         assert done.returncode == 0 and done.stdout.strip() == f"{name} {version('scenario-coverage')}"
+
+
+def test_jobs_auto_counts_only_the_cpus_the_process_may_use(tmp_path):
+    """``-j auto`` in a container or under ``taskset`` limited to one CPU runs one job at a time."""
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {name: "xml=pass\nsleep=0.5" for name in ("a", "b", "c", "d")})
+    exe = str(Path(sys.executable).parent / "scenario_batch_execution")
+    start = time.monotonic()
+    done = subprocess.run([exe, "-i", "in", "-o", "results", "-j", "auto", "--", *child_command(child)],
+                          cwd=tmp_path, env=cli_env(tmp_path), capture_output=True, text=True, timeout=60,
+                          preexec_fn=lambda: os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}))
+    took = time.monotonic() - start
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert took >= 2.0, f"four 0.5 s jobs took {took:.2f} s on one CPU: they ran side by side"

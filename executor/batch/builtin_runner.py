@@ -38,13 +38,21 @@ BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_
 START_TIMEOUT = 120.0
 
 
+def usable_cpus() -> int:
+    """The CPUs this process may run on (a container's or ``taskset``'s limit counts), at least 1.
+
+    What ``-j auto`` runs in parallel, and what a spare child is weighed against: ``os.cpu_count()``
+    counts the whole machine, and 64 jobs on the 2 CPUs a container was given only queue up.
+    """
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
 def spare_cores(slots: int) -> bool:
     """Whether this machine has a core left over when ``slots`` jobs run (for a warm spare child)."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        cores = os.cpu_count() or 1
-    return slots < cores
+    return slots < usable_cpus()
 
 
 class ForkServerError(OSError):

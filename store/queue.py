@@ -23,6 +23,7 @@ from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 from store import queue_statements as sql
 from store import states
 from store.database import StoreError, ensure_schema, open_engine, open_existing
+from store.driver_statements import DriverStatement, rows_as_mappings
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
@@ -33,6 +34,10 @@ DEFAULT_LEASE = 60.0
 
 #: Lease expirations after which a job ends as ``error`` instead of being queued again.
 DEFAULT_MAX_LOST = 3
+
+#: The columns the record of an attempt is written with (see ``QueueStore._end``).
+_ATTEMPT_KEYS = ("job_id", "attempt", "outcome", "exit_code", "started_at", "finished_at", "worker_id", "host",
+                 "log_path", "reason")
 
 class LeaseLost(StoreError):
     """The job is no longer held by this worker (its lease expired and was taken over, or it ended)."""
@@ -48,6 +53,16 @@ class QueueStore(QueueReads):
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
         self._conn: Connection | None = None
+        self._driver: dict[object, DriverStatement] = {}    # the per-job statements, compiled once
+
+    def _fast(self, key: object, build) -> DriverStatement:
+        """The per-job statement ``key`` for this engine's dialect (``build()`` makes the SQLAlchemy one)."""
+        statement = self._driver.get(key)
+        if statement is None:
+            built = build()
+            statement, keys = built if isinstance(built, tuple) else (built, None)
+            statement = self._driver[key] = DriverStatement(statement, self.engine.dialect, keys)
+        return statement
 
     @classmethod
     def open(cls, url: str | None = None) -> QueueStore:
@@ -158,16 +173,21 @@ class QueueStore(QueueReads):
                   "b_lease": now + lease, "b_now": now}
         if batch_id is not None:
             params["g_batch"] = batch_id
+        statement = self._fast(("claim", scope), lambda: sql.claim_statement(scope))
         with self._tx() as conn:
-            rows = conn.execute(sql.claim_statement(scope), params).all()
-        claimed = [Job.from_row(r._mapping) for r in rows]
+            rows = rows_as_mappings(statement.execute(conn, params))
+        claimed = [Job.from_row(r) for r in rows]
         claimed.sort(key=lambda j: (j.batch_id, j.seq))
         return claimed
 
     def started(self, job: Job, child_pid: int) -> bool:
         """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
+        statement = self._fast("started", lambda: sql.STARTED)
         with self._tx() as conn:
-            return conn.execute(sql.STARTED, {**self._holder(job), "b_child": child_pid}).rowcount == 1
+            cursor = statement.execute(conn, {**self._holder(job), "b_child": child_pid})
+            changed = cursor.rowcount
+            cursor.close()
+            return changed == 1
 
     def heartbeat(self, worker: WorkerIdentity, lease: float = DEFAULT_LEASE) -> set[int]:
         """Extend the leases of every job ``worker`` runs; returns the ids it still holds."""
@@ -192,14 +212,19 @@ class QueueStore(QueueReads):
         params = {**self._holder(job), "b_status": target.value, "b_exit": result.exit_code,
                   "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
                   "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
+        end = self._fast(("end", transition), lambda: sql.end_statement(transition))
+        attempt = self._fast("attempt", lambda: (sql.INSERT_ATTEMPT, _ATTEMPT_KEYS))
         with self._tx() as conn:
-            if conn.execute(sql.end_statement(transition), params).rowcount != 1:
+            cursor = end.execute(conn, params)
+            changed = cursor.rowcount
+            cursor.close()
+            if changed != 1:
                 raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
-            conn.execute(sql.INSERT_ATTEMPT, {
+            attempt.execute(conn, {
                 "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
                 "exit_code": result.exit_code, "started_at": result.started_at,
                 "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
-                "log_path": result.log_path, "reason": result.reason})
+                "log_path": result.log_path, "reason": result.reason}).close()
 
     def halt(self, batch_id: int, reason: str = states.HALT_REASON) -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""

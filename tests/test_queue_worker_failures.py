@@ -83,3 +83,42 @@ def test_claimed_jobs_are_given_back_when_the_store_fails_while_starting_them(pg
         statuses = admin.execute("SELECT status, lost FROM jobs").fetchall()
     assert lost == 0 and statuses == [("passed", 0)] * 3, (statuses, out)
     assert ledger(tmp_path) == {n: 1 for n in names}
+
+
+@pytest.mark.slow
+def test_results_the_store_refuses_for_a_while_are_kept_and_written_once_it_takes_them(pg_url, tmp_path):
+    """Recording a job's end fails like a lost connection until a gate opens: the worker keeps the results
+    (none is lost, none written twice) and writes them when the store works again."""
+    import psycopg
+
+    env = cli_env(tmp_path)
+    names = ["a", "b", "c"]
+    _enqueue(tmp_path, pg_url, {n: "" for n in names}, env)
+    database = pg_url.rsplit("/", 1)[1]
+    with psycopg.connect(f"postgresql://postgres@127.0.0.1:5432/{database}", autocommit=True) as admin:
+        admin.execute("CREATE TABLE gate (open boolean)")
+        admin.execute("""CREATE FUNCTION attempt_gate() RETURNS trigger LANGUAGE plpgsql AS $$
+            BEGIN
+              IF NOT EXISTS (SELECT 1 FROM gate WHERE open) THEN
+                RAISE EXCEPTION 'server closed the connection unexpectedly (test)';
+              END IF;
+              RETURN NEW;
+            END $$""")
+        admin.execute("CREATE TRIGGER attempt_gate BEFORE INSERT ON job_attempts "
+                      "FOR EACH ROW EXECUTE FUNCTION attempt_gate()")
+        worker = start_cli(["worker", "--store", pg_url, "-j", "3", "--poll", "0.1", "--lease", "60"],
+                           tmp_path, env)
+        deadline = time.monotonic() + 30
+        while ledger(tmp_path) != {n: 1 for n in names}:      # every job ran; none of its ends is recorded
+            assert time.monotonic() < deadline and worker.poll() is None
+            time.sleep(0.05)
+        time.sleep(1.0)
+        assert admin.execute("SELECT count(*) FROM jobs WHERE status = 'running'").fetchone()[0] == 3
+        admin.execute("INSERT INTO gate VALUES (true)")
+        out = worker.communicate(timeout=120)[0]
+        assert worker.returncode == 0, out
+        assert "retrying (results are kept until written)" in out, out
+        attempts = admin.execute("SELECT count(*) FROM job_attempts").fetchone()[0]
+        statuses = admin.execute("SELECT status FROM jobs").fetchall()
+    assert attempts == 3 and statuses == [("passed",)] * 3, (attempts, statuses, out)
+    assert ledger(tmp_path) == {n: 1 for n in names}

@@ -116,7 +116,8 @@ class Job:
 
     @classmethod
     def from_row(cls, row: Mapping[str, Any] | RowMapping) -> Job:
-        values = {name: row[name] for name in cls.__dataclass_fields__ if name in row}
+        data = row if isinstance(row, dict) else dict(row)     # a RowMapping answers ``in`` slowly
+        values = {name: data[name] for name in cls.__dataclass_fields__ if name in data}
         values["status"] = JobState(values["status"])
         return cls(**values)
 

@@ -13,7 +13,6 @@ import gc
 import hashlib
 import os
 import queue
-import stat
 import threading
 import time
 from collections import Counter, deque
@@ -22,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
 from executor.batch.builtin_runner import ForkServer, ForkServerError, spare_cores
+from executor.batch.job_folders import JobFolders
 from executor.batch.job_run import Done, JobRun, Started, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
@@ -45,41 +45,6 @@ _GIVE_UP_AFTER_STOP = 30.0
 #: its result is then written alone (one transaction per job instead of two). The record serves to
 #: end the child of a runner that died together with its watchdog, which matters for long jobs.
 STARTED_RECORD_AFTER = 0.1
-
-
-def prepare_job_folder(root: Path, folder: Path, real_root: str | None = None) -> None:
-    """Create a job's folder under the output root, refusing one that leads elsewhere.
-
-    A symbolic link planted where a job's folder goes (``results/cut4 -> /home/me``) would make the
-    job write its log and results through it; so would a link among the root's own subfolders. The
-    folder must be a real directory whose real path lies inside the root's real path.
-
-    ``real_root``: the root's real path, when the caller resolved it already (once per batch). A folder
-    right inside the root then needs no path resolution: being a real directory (not a link) in the
-    root, its real path is inside the root's.
-    """
-    if real_root is None:
-        root.mkdir(parents=True, exist_ok=True)
-        real_root = os.path.realpath(root)
-    if folder.parent == root and folder.name not in ("", ".", ".."):
-        try:
-            os.mkdir(folder)
-        except FileExistsError:
-            pass
-        except FileNotFoundError:         # the root went away meanwhile: make it again
-            root.mkdir(parents=True, exist_ok=True)
-            folder.mkdir(exist_ok=True)
-        if stat.S_ISLNK(os.lstat(folder).st_mode):
-            raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
-        if not folder.is_dir():
-            raise FileExistsError(f"the job folder {folder} exists and is not a folder")
-        return
-    if folder.is_symlink():
-        raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
-    folder.mkdir(parents=True, exist_ok=True)
-    real = folder.resolve()
-    if not real.is_relative_to(real_root):
-        raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
 
 
 @dataclass
@@ -154,7 +119,7 @@ class Worker:
         self._started = 0
         self._unsure_claims = False
         self._fork_server: ForkServer | None = None
-        self._real_roots: dict[str, str] = {}    # output root -> its real path (see prepare_job_folder)
+        self._folders = JobFolders()
         self._started_due: float | None = None   # when the oldest held start record is to be written
 
     # ------------------------------------------------------------------ control
@@ -307,7 +272,7 @@ class Worker:
         problem: str | None = None
         full_disk = False                   # the problem is a full disk: the job is stopped, not judged
         try:
-            prepare_job_folder(root, output_dir, self._real_root(root))
+            self._folders.prepare(root, output_dir)
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
@@ -338,15 +303,6 @@ class Worker:
         ended = time.time()
         self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
                               else launch_failure(output_dir, began, ended, problem)))
-
-    def _real_root(self, root: Path) -> str:
-        """The real path of an output root, created and resolved once per run of the loop."""
-        key = str(root)
-        real = self._real_roots.get(key)
-        if real is None:
-            root.mkdir(parents=True, exist_ok=True)
-            real = self._real_roots[key] = os.path.realpath(root)
-        return real
 
     def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
         """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""

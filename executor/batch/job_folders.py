@@ -1,0 +1,59 @@
+"""The folder of each job under the output root: made on demand, never a way out of the root.
+
+A symbolic link planted where a job's folder goes (``results/cut4 -> /home/me``) would make the job
+write its log and results through it; so would a link among the root's own subfolders. Every job's
+folder must be a real directory whose real path lies inside the root's real path.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+
+def prepare_job_folder(root: Path, folder: Path, real_root: str | None = None) -> None:
+    """Create a job's folder under the output root, refusing one that leads elsewhere (see the module doc).
+
+    ``real_root``: the root's real path, when the caller resolved it already (once per batch). A folder
+    right inside the root then needs no path resolution: being a real directory (not a link) in the
+    root, its real path is inside the root's.
+    """
+    if real_root is None:
+        root.mkdir(parents=True, exist_ok=True)
+        real_root = os.path.realpath(root)
+    if folder.parent == root and folder.name not in ("", ".", ".."):
+        try:
+            os.mkdir(folder)
+        except FileExistsError:
+            pass
+        except FileNotFoundError:         # the root went away meanwhile: make it again
+            root.mkdir(parents=True, exist_ok=True)
+            folder.mkdir(exist_ok=True)
+        if stat.S_ISLNK(os.lstat(folder).st_mode):
+            raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
+        if not folder.is_dir():
+            raise FileExistsError(f"the job folder {folder} exists and is not a folder")
+        return
+    if folder.is_symlink():
+        raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
+    folder.mkdir(parents=True, exist_ok=True)
+    real = folder.resolve()
+    if not real.is_relative_to(real_root):
+        raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
+
+
+class JobFolders:
+    """Prepares job folders, resolving each output root once (a worker makes thousands of folders)."""
+
+    def __init__(self) -> None:
+        self._real_roots: dict[str, str] = {}    # output root -> its real path
+
+    def prepare(self, root: Path, folder: Path) -> None:
+        """:func:`prepare_job_folder` with the root's real path resolved on its first job."""
+        key = str(root)
+        real = self._real_roots.get(key)
+        if real is None:
+            root.mkdir(parents=True, exist_ok=True)
+            real = self._real_roots[key] = os.path.realpath(root)
+        prepare_job_folder(root, folder, real)

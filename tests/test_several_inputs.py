@@ -77,3 +77,17 @@ def test_a_file_name_that_is_not_utf8_fails_alone(tmp_path):
     assert varied.returncode == 1
     assert "odd\\xfe.osc: the file name is not UTF-8" in varied.stderr and "internal error" not in varied.stderr
     assert sorted(p.name for p in (tmp_path / "out").glob("*.sce")) == ["good0.sce", "good1.sce"]
+
+
+def test_jobs_record_the_real_paths_of_linked_input_folders_and_files(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "real_in", {"a": "xml=pass"})
+    write_scenarios(tmp_path / "elsewhere", {"target": "xml=pass"})
+    (tmp_path / "real_in" / "b.sce").symlink_to(tmp_path / "elsewhere" / "target.sce")
+    (tmp_path / "in").symlink_to(tmp_path / "real_in", target_is_directory=True)
+    done = run_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 0, done.stdout + done.stderr
+    files = {suite.get("name"): {p.get("name"): p.get("value") for p in suite.iter("property")}["scenario_file"]
+             for suite in ET.parse(tmp_path / "results" / "test.xml").getroot().iter("testsuite")}
+    real = tmp_path.resolve()
+    assert files == {"a": str(real / "real_in" / "a.sce"), "b": str(real / "elsewhere" / "target.sce")}

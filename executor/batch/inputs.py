@@ -104,6 +104,7 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
     # A shard hashes every file to place it, holding only the hashes (not 666,469 files' contents).
     kept = shard.select([hashlib.sha256(path.read_bytes()).hexdigest() + "\0" + path.name for path in files]) \
         if shard is not None else None
+    real_folders: dict[Path, str] = {}      # each input folder resolved once, not once per file
     for position, path in enumerate(files):
         if kept is not None and position not in kept:
             continue
@@ -117,7 +118,7 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
                 text = None
             if text is not None and "\x00" in text:
                 text = None
-        resolved = str(path.resolve())
+        resolved = _real_path(path, real_folders)
         if not _utf8(resolved):
             # The store (and every report) holds text: a name that is not UTF-8 is kept escaped, so this job
             # alone fails (its file is not found under the escaped name) and the others run.
@@ -125,6 +126,17 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
             continue
         specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
     return specs
+
+
+def _real_path(path: Path, real_folders: dict[Path, str]) -> str:
+    """``path.resolve()``, with the folder's real path looked up once (a file that is a link is resolved)."""
+    if path.is_symlink():
+        return str(path.resolve())
+    folder = path.parent
+    real = real_folders.get(folder)
+    if real is None:
+        real = real_folders[folder] = str(folder.resolve())
+    return os.path.join(real, path.name)
 
 
 def not_utf8(files: Sequence[Path]) -> list[str]:

@@ -25,18 +25,29 @@ from sqlalchemy.sql import ClauseElement
 from sqlalchemy.sql.compiler import SQLCompiler
 
 
+class DriverResult:
+    """What a statement returned, read before its cursor closed: rows as ``{column: value}``, and ``rowcount``."""
+
+    __slots__ = ("rows", "rowcount")
+
+    def __init__(self, rows: list[dict[str, Any]], rowcount: int) -> None:
+        self.rows, self.rowcount = rows, rowcount
+
+
 class DriverStatement:
     """One statement compiled for ``dialect``; :meth:`execute` runs it on a connection's driver cursor."""
 
     def __init__(self, statement: ClauseElement, dialect: Dialect, column_keys: Sequence[str] | None = None) -> None:
         compiled = cast(SQLCompiler, statement.compile(dialect=dialect,
                                                        column_keys=list(column_keys) if column_keys else None))
+        if compiled.post_compile_params or compiled.literal_execute_params:
+            # an expanding IN (…) is rendered per execution: such a statement needs SQLAlchemy's execution
+            raise ValueError(f"not a fixed statement (its text depends on the values): {compiled}")
         self.sql = str(compiled)
         self._compiled = compiled
         self._dialect = dialect
         self._order = list(compiled.positiontup or []) if compiled.positional else None
-        # Conversions SQLAlchemy applies to some bound values on this dialect (floats on SQLite).
-        self._processors = dict(getattr(compiled, "_bind_processors", None) or {})
+        self._processors = _bind_processors(compiled, dialect)
 
     def parameters(self, values: Mapping[str, Any]) -> Sequence[Any] | dict[str, Any]:
         """The driver's parameters for ``values`` (the statement's own literals filled in)."""
@@ -46,32 +57,49 @@ class DriverStatement:
                 params[name] = process(params[name])
         return [params[name] for name in self._order] if self._order is not None else params
 
-    def execute(self, conn: Connection, values: Mapping[str, Any]) -> Any:
-        """Run with ``values`` in ``conn``'s open transaction; the driver's cursor (rows, ``rowcount``).
+    def execute(self, conn: Connection, values: Mapping[str, Any]) -> DriverResult:
+        """Run with ``values`` in ``conn``'s open transaction; its rows and row count (the cursor is closed).
 
-        The caller closes the cursor. A driver error is raised as :class:`~sqlalchemy.exc.DBAPIError`.
+        Any driver error, also from opening or reading the cursor, is raised as
+        :class:`~sqlalchemy.exc.DBAPIError`; a lost connection is invalidated, as SQLAlchemy's own
+        execution does, and so is one interrupted (Ctrl-C) in the middle of a statement.
         """
         params = self.parameters(values)
         driver = conn.connection.dbapi_connection
         assert driver is not None, "the connection is closed"
-        cursor = driver.cursor()
         dbapi = self._dialect.loaded_dbapi
+        cursor = None
         try:
+            cursor = driver.cursor()
             cursor.execute(self.sql, params)
+            names = [d[0] for d in cursor.description or ()]
+            rows = [dict(zip(names, row, strict=True)) for row in cursor.fetchall()] if names else []
+            return DriverResult(rows, cursor.rowcount)
         except dbapi.Error as exc:
             lost = self._dialect.is_disconnect(exc, driver, cursor)
-            cursor.close()
             if lost:
                 conn.invalidate(exc)
             raise DBAPIError.instance(self.sql, params, exc, dbapi.Error, connection_invalidated=lost,
                                       dialect=self._dialect) from exc
-        return cursor
+        except (KeyboardInterrupt, SystemExit):
+            conn.invalidate()                    # the driver may be mid-statement: never reuse it
+            raise
+        finally:
+            if cursor is not None:
+                try:
+                    cursor.close()
+                except dbapi.Error:
+                    pass
 
 
-def rows_as_mappings(cursor: Any) -> list[dict[str, Any]]:
-    """The rows a statement returned, as ``{column: value}`` (the cursor is closed)."""
-    try:
-        names = [d[0] for d in cursor.description or ()]
-        return [dict(zip(names, row, strict=True)) for row in cursor.fetchall()]
-    finally:
-        cursor.close()
+def _bind_processors(compiled: SQLCompiler, dialect: Dialect) -> dict[str, Any]:
+    """Conversions SQLAlchemy applies to some bound values on this dialect (floats on SQLite).
+
+    The compiled statement's own table, as SQLAlchemy's execution uses it; should a release rename that
+    attribute, each parameter type's public ``bind_processor`` gives the same conversions.
+    """
+    own = getattr(compiled, "_bind_processors", None)
+    if isinstance(own, Mapping):
+        return dict(own)
+    return {compiled.bind_names[bind]: process for bind in compiled.bind_names
+            if (process := bind.type.bind_processor(dialect)) is not None}

@@ -23,7 +23,7 @@ from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 from store import queue_statements as sql
 from store import states
 from store.database import StoreError, ensure_schema, open_engine, open_existing
-from store.driver_statements import DriverStatement, rows_as_mappings
+from store.driver_statements import DriverStatement
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
@@ -175,7 +175,7 @@ class QueueStore(QueueReads):
             params["g_batch"] = batch_id
         statement = self._fast(("claim", scope), lambda: sql.claim_statement(scope))
         with self._tx() as conn:
-            rows = rows_as_mappings(statement.execute(conn, params))
+            rows = statement.execute(conn, params).rows
         claimed = [Job.from_row(r) for r in rows]
         claimed.sort(key=lambda j: (j.batch_id, j.seq))
         return claimed
@@ -184,10 +184,7 @@ class QueueStore(QueueReads):
         """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
         statement = self._fast("started", lambda: sql.STARTED)
         with self._tx() as conn:
-            cursor = statement.execute(conn, {**self._holder(job), "b_child": child_pid})
-            changed = cursor.rowcount
-            cursor.close()
-            return changed == 1
+            return statement.execute(conn, {**self._holder(job), "b_child": child_pid}).rowcount == 1
 
     def heartbeat(self, worker: WorkerIdentity, lease: float = DEFAULT_LEASE) -> set[int]:
         """Extend the leases of every job ``worker`` runs; returns the ids it still holds."""
@@ -215,16 +212,13 @@ class QueueStore(QueueReads):
         end = self._fast(("end", transition), lambda: sql.end_statement(transition))
         attempt = self._fast("attempt", lambda: (sql.INSERT_ATTEMPT, _ATTEMPT_KEYS))
         with self._tx() as conn:
-            cursor = end.execute(conn, params)
-            changed = cursor.rowcount
-            cursor.close()
-            if changed != 1:
+            if end.execute(conn, params).rowcount != 1:
                 raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
             attempt.execute(conn, {
                 "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
                 "exit_code": result.exit_code, "started_at": result.started_at,
                 "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
-                "log_path": result.log_path, "reason": result.reason}).close()
+                "log_path": result.log_path, "reason": result.reason})
 
     def halt(self, batch_id: int, reason: str = states.HALT_REASON) -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""

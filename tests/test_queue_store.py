@@ -171,3 +171,25 @@ def test_incompatible_schema_version_is_refused(tmp_path):
     conn.close()
     with pytest.raises(StoreError, match="schema version"):
         QueueStore.open(url)
+
+
+def test_driver_statements_bind_as_sqlalchemy_does_and_refuse_a_text_that_depends_on_the_values():
+    from sqlalchemy import bindparam, select
+    from sqlalchemy.dialects import postgresql, sqlite
+
+    from store.driver_statements import DriverStatement
+    from store.queue_statements import end_statement
+    from store.queue_tables import jobs
+
+    values = {"b_status": "passed", "b_exit": 0, "b_end": 2, "b_duration": 1, "b_reason": None, "b_xml": "<x/>",
+              "b_log": "", "b_out": "/o", "g_job": 7, "g_holder": "w", "g_attempt": 1}
+    on_sqlite = DriverStatement(end_statement(Transition.FINISH), sqlite.dialect())
+    params = on_sqlite.parameters(values)
+    assert on_sqlite.sql.count("?") == len(params)
+    assert 2.0 in params and isinstance(params[params.index(2.0)], float)      # SQLite gets floats, as before
+    assert "running" in params and 7 in params and "w" in params             # the guard's own literal is filled in
+    on_postgres = DriverStatement(end_statement(Transition.FINISH), postgresql.dialect())
+    assert on_postgres.parameters(values)["g_job"] == 7 and "%(g_job)s" in on_postgres.sql
+    expanding = select(jobs.c.id).where(jobs.c.id.in_(bindparam("ids", expanding=True)))
+    with pytest.raises(ValueError, match="not a fixed statement"):
+        DriverStatement(expanding, sqlite.dialect())

@@ -39,10 +39,11 @@ START_TIMEOUT = 120.0
 
 
 def usable_cpus() -> int:
-    """The CPUs this process may run on (a container's or ``taskset``'s limit counts), at least 1.
+    """The CPUs this process may run on (a CPU set given by ``taskset`` or a container's ``--cpuset-cpus``), at least 1.
 
     What ``-j auto`` runs in parallel, and what a spare child is weighed against: ``os.cpu_count()``
-    counts the whole machine, and 64 jobs on the 2 CPUs a container was given only queue up.
+    counts the whole machine, and 64 jobs on the 2 CPUs a container was given only queue up. A CPU
+    *quota* (``docker --cpus``, a Kubernetes CPU limit) is not seen here: give ``-j N`` there.
     """
     try:
         return max(1, len(os.sched_getaffinity(0)))

@@ -138,7 +138,7 @@ class Worker:
         """
         watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
         gc.collect()
-        gc.freeze()      # what exists now (imports, the batch) is never scanned again: collections stay short
+        gc.freeze()      # what exists now (imports, the batch) is not scanned while the loop runs
         try:
             return self._loop()
         except BaseException:
@@ -148,6 +148,7 @@ class Worker:
                 run.join(timeout=5.0)
             raise
         finally:
+            gc.unfreeze()                        # a later loop in this process freezes afresh
             if self._fork_server is not None:
                 self._fork_server.close()
                 self._fork_server = None

@@ -19,6 +19,7 @@ from typing import Any
 
 from sqlalchemy import Connection, Engine, func, insert, inspect, select
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
+from sqlalchemy.sql import ClauseElement
 
 from store import queue_statements as sql
 from store import states
@@ -55,14 +56,12 @@ class QueueStore(QueueReads):
         self._conn: Connection | None = None
         self._driver: dict[object, DriverStatement] = {}    # the per-job statements, compiled once
 
-    def _fast(self, key: object, build) -> DriverStatement:
-        """The per-job statement ``key`` for this engine's dialect (``build()`` makes the SQLAlchemy one)."""
-        statement = self._driver.get(key)
-        if statement is None:
-            built = build()
-            statement, keys = built if isinstance(built, tuple) else (built, None)
-            statement = self._driver[key] = DriverStatement(statement, self.engine.dialect, keys)
-        return statement
+    def _fast(self, key: object, statement: ClauseElement, column_keys: tuple[str, ...] | None = None) -> DriverStatement:
+        """The per-job ``statement`` compiled for this engine's dialect, once per ``key``."""
+        compiled = self._driver.get(key)
+        if compiled is None:
+            compiled = self._driver[key] = DriverStatement(statement, self.engine.dialect, column_keys)
+        return compiled
 
     @classmethod
     def open(cls, url: str | None = None) -> QueueStore:
@@ -173,7 +172,7 @@ class QueueStore(QueueReads):
                   "b_lease": now + lease, "b_now": now}
         if batch_id is not None:
             params["g_batch"] = batch_id
-        statement = self._fast(("claim", scope), lambda: sql.claim_statement(scope))
+        statement = self._fast(("claim", scope), sql.claim_statement(scope))
         with self._tx() as conn:
             rows = statement.execute(conn, params).rows
         claimed = [Job.from_row(r) for r in rows]
@@ -182,7 +181,7 @@ class QueueStore(QueueReads):
 
     def started(self, job: Job, child_pid: int) -> bool:
         """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
-        statement = self._fast("started", lambda: sql.STARTED)
+        statement = self._fast("started", sql.STARTED)
         with self._tx() as conn:
             return statement.execute(conn, {**self._holder(job), "b_child": child_pid}).rowcount == 1
 
@@ -209,8 +208,8 @@ class QueueStore(QueueReads):
         params = {**self._holder(job), "b_status": target.value, "b_exit": result.exit_code,
                   "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
                   "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
-        end = self._fast(("end", transition), lambda: sql.end_statement(transition))
-        attempt = self._fast("attempt", lambda: (sql.INSERT_ATTEMPT, _ATTEMPT_KEYS))
+        end = self._fast(("end", transition), sql.end_statement(transition))
+        attempt = self._fast("attempt", sql.INSERT_ATTEMPT, _ATTEMPT_KEYS)
         with self._tx() as conn:
             if end.execute(conn, params).rowcount != 1:
                 raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")

@@ -324,18 +324,17 @@ class _Server:
                 os.killpg(pid, signal.SIGKILL)
             except OSError:
                 pass
-        if spare is None:
-            return
-        spare.sock.close()                       # a spare still warming up finds no job and ends
-        for kill in (os.killpg, os.kill):
+        if spare is not None:
+            spare.sock.close()                   # a spare still warming up finds no job and ends
+            for kill in (os.killpg, os.kill):
+                try:
+                    kill(spare.pid, signal.SIGKILL)
+                except OSError:
+                    pass
             try:
-                kill(spare.pid, signal.SIGKILL)
-            except OSError:
+                os.waitpid(spare.pid, 0)
+            except ChildProcessError:
                 pass
-        try:
-            os.waitpid(spare.pid, 0)
-        except ChildProcessError:
-            pass
         if self.scratch is not None:             # a spare killed while warming up leaves its probe run
             import shutil
 

@@ -12,16 +12,13 @@ import stat
 from pathlib import Path
 
 
-def prepare_job_folder(root: Path, folder: Path, real_root: str | None = None) -> None:
+def prepare_job_folder(root: Path, folder: Path, real_root: str) -> None:
     """Create a job's folder under the output root, refusing one that leads elsewhere (see the module doc).
 
-    ``real_root``: the root's real path, when the caller resolved it already (once per batch). A folder
-    right inside the root then needs no path resolution: being a real directory (not a link) in the
-    root, its real path is inside the root's.
+    ``real_root``: the root's real path, resolved once per batch (:class:`JobFolders`). A folder right
+    inside the root needs no path resolution: being a real directory (not a link) in the root, its
+    real path is inside the root's.
     """
-    if real_root is None:
-        root.mkdir(parents=True, exist_ok=True)
-        real_root = os.path.realpath(root)
     if folder.parent == root and folder.name not in ("", ".", ".."):
         try:
             os.mkdir(folder)
@@ -30,9 +27,10 @@ def prepare_job_folder(root: Path, folder: Path, real_root: str | None = None) -
         except FileNotFoundError:         # the root went away meanwhile: make it again
             root.mkdir(parents=True, exist_ok=True)
             folder.mkdir(exist_ok=True)
-        if stat.S_ISLNK(os.lstat(folder).st_mode):
+        mode = os.lstat(folder).st_mode
+        if stat.S_ISLNK(mode):
             raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
-        if not folder.is_dir():
+        if not stat.S_ISDIR(mode):
             raise FileExistsError(f"the job folder {folder} exists and is not a folder")
         return
     if folder.is_symlink():
@@ -50,7 +48,7 @@ class JobFolders:
         self._real_roots: dict[str, str] = {}    # output root -> its real path
 
     def prepare(self, root: Path, folder: Path) -> None:
-        """:func:`prepare_job_folder` with the root's real path resolved on its first job."""
+        """:func:`prepare_job_folder`, the root made and its real path resolved on its first job."""
         key = str(root)
         real = self._real_roots.get(key)
         if real is None:

@@ -27,6 +27,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 
 class SimulationError(Exception):
@@ -37,7 +38,7 @@ class SimulationStepError(SimulationError):
     """The simulation's ``step()`` raised while a scenario ran (the scenario fails)."""
 
 
-def simulation_dt(simulation: object) -> float:
+def simulation_dt(simulation: Any) -> float:
     """The simulation's ``dt`` as seconds; :class:`SimulationError` unless it is a positive, finite number."""
     name = type(simulation).__name__
     try:
@@ -75,6 +76,9 @@ class SimulationClock(Clock):
     """
 
     __slots__ = ("dt", "steps", "_time")
+    dt: float
+    steps: int
+    _time: float
 
     def __init__(self, dt: float) -> None:
         if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt) or dt <= 0:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import operator as op
+from collections.abc import Callable
+from typing import Any
 
 from py_trees.common import Status
 
 from executor.actions.base import ActionBase, ActionError
 
-_OPERATORS = {"==": op.eq, "!=": op.ne, "<": op.lt, "<=": op.le, ">": op.gt, ">=": op.ge}
+_OPERATORS: dict[str, Callable[[Any, Any], Any]] = {"==": op.eq, "!=": op.ne, "<": op.lt, "<=": op.le, ">": op.gt, ">=": op.ge}
 
 
 def _current(value: object) -> object:

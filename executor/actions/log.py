@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from py_trees.common import Status
 
 from executor.actions.base import ActionBase, ActionError
@@ -10,7 +12,7 @@ from executor.actions.base import ActionBase, ActionError
 class Log(ActionBase):
     """Logs ``msg`` once per activation and succeeds."""
 
-    def execute(self, msg: object = None) -> None:
+    def execute(self, msg: Any = None) -> None:
         if msg is None:
             raise ActionError("log(): no message given")
         self.msg = msg

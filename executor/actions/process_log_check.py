@@ -6,9 +6,14 @@ of ``values``; fails once that process has ended and none was found.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from py_trees.common import Status
 
 from executor.actions.base import ActionBase, ActionError
+
+if TYPE_CHECKING:
+    from executor.actions.run_process import RunProcess
 
 
 class ProcessLogCheck(ActionBase):
@@ -21,10 +26,10 @@ class ProcessLogCheck(ActionBase):
         self.process_name = process_name
         self.values = [str(v) for v in (values or [])]
         self.from_start = from_start
-        self.process = None
+        self.process: RunProcess | None = None
         self.start_index = 0
 
-    def _find_process(self):
+    def _find_process(self) -> RunProcess:
         candidates = (self.context.processes.get(self.process_name, []) if self.context else [])
         if not candidates:
             raise ActionError(f"process_log_check(): no run_process labelled '{self.process_name}'")
@@ -33,12 +38,13 @@ class ProcessLogCheck(ActionBase):
         return candidates[0]
 
     def update(self) -> Status:
-        if self.process is None:
-            self.process = self._find_process()
+        process = self.process
+        if process is None:
+            process = self.process = self._find_process()
             if not self.from_start:
-                self.start_index = len(self.process.output_lines())
-        complete = self.process.output_complete()
-        for line in self.process.output_lines()[self.start_index:]:
+                self.start_index = len(process.output_lines())
+        complete = process.output_complete()
+        for line in process.output_lines()[self.start_index:]:
             for value in self.values:
                 if value in line:
                     self.feedback_message = f"found '{value}' in '{line}'"

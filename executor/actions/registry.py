@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Iterable, Iterator
+from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.resolve.model import ActionCall, Behavior, Composite, Modified, Scenario
+
+if TYPE_CHECKING:
+    from importlib.metadata import EntryPoint
 
 ENTRY_POINT_GROUP = "scenario_execution.actions"
 
@@ -44,16 +48,16 @@ class ActionLoadError(OscError):
     """cannot load the implementation of an action"""
 
 
-_entry_points: dict[str, object] | None = None
+_entry_points: dict[str, EntryPoint] | None = None
 
 
-def _plugin_entry_points() -> dict[str, object]:
+def _plugin_entry_points() -> dict[str, EntryPoint]:
     """Entry points of the action group by name (scanned once per process)."""
     global _entry_points
     if _entry_points is None:
         from importlib.metadata import entry_points
 
-        found: dict[str, object] = {}
+        found: dict[str, EntryPoint] = {}
         for ep in entry_points(group=ENTRY_POINT_GROUP):
             found.setdefault(ep.name, ep)
         _entry_points = found
@@ -66,7 +70,7 @@ def _load_target(target: str):
     return getattr(module, attr)
 
 
-def find_plugin(call: ActionCall) -> tuple[str, object] | None:
+def find_plugin(call: ActionCall) -> tuple[str, str | EntryPoint] | None:
     """``(plugin name, loader)`` of the first available implementation of ``call``, else None.
 
     The loader is either a built-in ``module:Class`` string or an entry point; nothing is imported.

@@ -15,13 +15,14 @@ import signal
 import subprocess
 import threading
 import time
+from typing import Any
 
 from py_trees.common import Status
 
 from executor.actions.base import ActionBase, ActionError
 
 
-def _signal_number(value: object) -> int:
+def _signal_number(value: Any) -> int:
     if isinstance(value, tuple) and len(value) == 2:  # an enum member: (name, value)
         value = value[1]
     try:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from py_trees.common import Status
 
 from executor.actions.base import ActionBase, ActionError
@@ -12,7 +14,7 @@ class _Step(ActionBase):
 
     def __init__(self) -> None:
         super().__init__(resolve_variable_reference_arguments_in_execute=False)
-        self.target = None
+        self.target: Any = None              # a var handle (get_value, set_value, key)
 
     def execute(self, target_variable: object) -> None:
         if not (hasattr(target_variable, "get_value") and hasattr(target_variable, "set_value")):

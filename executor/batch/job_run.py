@@ -156,7 +156,8 @@ class JobRun:
                                  output_dir=str(self.output_dir))
             pid = child.start()
             self._child = child
-        self.events.put(Started(self, pid))
+        if pid is not None:                   # None: cancelled before it started (wait() says so)
+            self.events.put(Started(self, pid))
         outcome = child.wait()
         if options.post_run and not outcome.cancelled:
             problems.extend(run_post_hooks(options.post_run, self.output_dir, log_path=self.output_dir / HOOK_LOG,

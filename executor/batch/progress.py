@@ -10,11 +10,14 @@ shown live instead of a progress bar). ``NO_COLOR`` keeps the display and drops 
 from __future__ import annotations
 
 import sys
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from executor.terminal import printable, wants_rich
 from store.jobs import Job, JobResult
 from store.states import JobState
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
 
 
 class Reporter:
@@ -81,7 +84,7 @@ class RichReporter(Reporter):
             TextColumn("[green]{task.fields[passed]} passed"), TextColumn("[red]{task.fields[failed]} failed"),
             TextColumn("[cyan]{task.fields[running]} running"), TimeRemainingColumn(),
             console=self.console, transient=False)
-        self.task = None
+        self.task: TaskID | None = None
         self.passed = self.failed = self.running = 0
 
     def begin(self, total: int | None, done: int = 0) -> None:

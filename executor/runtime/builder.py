@@ -14,6 +14,7 @@ import functools
 import inspect
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
+from typing import Any
 
 import py_trees
 from py_trees.common import ParallelPolicy
@@ -63,13 +64,14 @@ def build_behavior(node: Behavior, context: ScenarioContext) -> py_trees.behavio
     can say where in the scenario it happened.
     """
     behaviour = _build(node, context)
-    behaviour.osc_location = getattr(node, "location", None)
+    behaviour.osc_location = getattr(node, "location", None)  # type: ignore[attr-defined]
     behaviour.osc_labelled = bool(getattr(node, "labelled", False))  # type: ignore[attr-defined]
     return behaviour
 
 
 def _build(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behaviour:
     if isinstance(node, Composite):
+        composite: py_trees.composites.Composite
         if node.kind == "serial":
             composite = py_trees.composites.Sequence(name=node.name, memory=True)
         elif node.kind == "parallel":
@@ -84,9 +86,9 @@ def _build(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behav
     if isinstance(node, ActionCall):
         return make_action(node, context)
     if isinstance(node, Modified):
-        child = build_behavior(node.child, context)
+        decorated = build_behavior(node.child, context)
         try:
-            return build_modifier(node.modifier, dict(node.arguments), child, context)
+            return build_modifier(node.modifier, dict(node.arguments), decorated, context)
         except ModifierError as exc:
             raise BuildError(str(exc), node.location) from exc
     if isinstance(node, WaitElapsed):
@@ -153,7 +155,7 @@ def make_action(call: ActionCall, context: ScenarioContext) -> py_trees.behaviou
         raise BuildError(f"action '{call.action}': {cls.__name__}.__init__() needs {_names(missing)}, "
                          "which the invocation does not give", call.location)
     try:
-        init_values = {n: context.value(arguments[n]) for n in init_names}
+        init_values: dict[str, Any] = {n: context.value(arguments[n]) for n in init_names}
         instance = cls(**init_values)
     except OscError:
         raise
@@ -174,7 +176,7 @@ def make_action(call: ActionCall, context: ScenarioContext) -> py_trees.behaviou
         if hasattr(instance, "_execute_arguments"):
             instance._execute_arguments = _argument_binder(instance, selected, context)
     instance.name = call.name
-    instance.logger = context.logger.child(call.name)
+    instance.logger = context.logger.child(call.name)  # type: ignore[assignment] # same methods as py_trees'
     _guard_life_cycle(instance, call)
     return instance
 
@@ -220,7 +222,7 @@ def _argument_binder(instance, selected: dict, context: ScenarioContext) -> Call
 
     def arguments() -> dict:
         handles = not getattr(instance, "resolve_variable_reference_arguments_in_execute", True)
-        values = {}
+        values: dict[str, object] = {}
         for name, expr in selected.items():
             if handles and isinstance(expr, VariableRef):
                 values[name] = VariableHandle(expr.variable.key, variables)

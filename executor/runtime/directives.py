@@ -9,6 +9,8 @@ change while no action runs, which :mod:`~executor.runtime.quiescence` relies on
 
 from __future__ import annotations
 
+from typing import Any
+
 import py_trees
 from py_trees.common import Status
 
@@ -42,7 +44,7 @@ class WaitElapsed(py_trees.behaviour.Behaviour):
         self.duration = 0.0
 
     def initialise(self) -> None:
-        value = self.context.value(self.duration_expr)
+        value: Any = self.context.value(self.duration_expr)   # float() says whether it is a duration
         try:
             self.duration = float(value)
         except (TypeError, ValueError) as exc:

@@ -10,6 +10,8 @@ as the model says (:class:`coverage_engine.resolve.model.Modified`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import py_trees
 from py_trees import decorators
 from py_trees.common import Status
@@ -67,7 +69,7 @@ class UntilEvent(decorators.Decorator):
         return self.decorated.status
 
 
-_CONVERTERS = {
+_CONVERTERS: dict[str, Callable[..., decorators.Decorator]] = {
     "inverter": decorators.Inverter,
     "failure_is_running": decorators.FailureIsRunning,
     "failure_is_success": decorators.FailureIsSuccess,

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Sequence
 
 from coverage_engine.errors import OscError
 from executor.runtime.logger import Logger
@@ -81,12 +82,14 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
     from coverage_engine.files.loader import load_scenario_file
     from executor.runtime.planned_runs import split_output_dirs
 
-    documents: list = [None]
+    documents: Sequence[dict | None] = [None]
     path = request.parameter_file
     if path:
         from coverage_engine.files.parameters import read_parameter_documents
 
-        documents = read_parameter_documents(path) or [None]
+        documents = read_parameter_documents(path)
+        if not documents:
+            documents = [None]
         for index, document in enumerate(documents):
             if not document:
                 which = f"document {index + 1} is empty" if len(documents) > 1 else "it holds no parameters"

@@ -14,6 +14,7 @@ know — means "tick at the next step" (:data:`NOW`).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import py_trees
 from py_trees.common import ParallelPolicy, Status
@@ -35,24 +36,27 @@ def next_wake(node: py_trees.behaviour.Behaviour) -> float:
 
     The contract: for every clock time ``t < next_wake(root)`` a tick is a no-op.
     """
-    kind = type(node)
+    kind = type(node)                  # exact types: a subclass may do more than wait
     if kind is directives.WaitElapsed:
-        return node.finish
+        return cast(directives.WaitElapsed, node).finish
     if kind is directives.WaitEvent:
         # emitted later in the same tick (by a branch ticked after this one): seen next tick
-        return NOW if node.event in node.context.events else NEVER
+        waiting = cast(directives.WaitEvent, node)
+        return NOW if waiting.event in waiting.context.events else NEVER
     if kind is directives.WaitCondition:
-        if not node.pure:
+        condition = cast(directives.WaitCondition, node)
+        if not condition.pure:
             return NOW
         try:
-            return NOW if node.context.value(node.condition) else NEVER
+            return NOW if condition.context.value(condition.condition) else NEVER
         except Exception:  # noqa: BLE001 - let the next tick report it
             return NOW
     if kind is py_trees.composites.Sequence:
-        child = node.current_child
+        child = cast(py_trees.composites.Sequence, node).current_child
         return next_wake(child) if child is not None and child.status is Status.RUNNING else NOW
     if kind is py_trees.composites.Parallel:
-        synchronise = isinstance(node.policy, ParallelPolicy.SuccessOnAll) and node.policy.synchronise
+        policy = cast(py_trees.composites.Parallel, node).policy
+        synchronise = isinstance(policy, ParallelPolicy.SuccessOnAll) and policy.synchronise
         wake = NEVER
         for child in node.children:
             if child.status is Status.RUNNING:
@@ -63,12 +67,12 @@ def next_wake(node: py_trees.behaviour.Behaviour) -> float:
                 return NOW
         return wake
     if kind is ClockTimeout:
-        child = node.decorated
-        if child.status is not Status.RUNNING:
+        timeout = cast(ClockTimeout, node)
+        if timeout.decorated.status is not Status.RUNNING:
             return NOW
         # the timeout fires once the clock is strictly past its deadline
-        return min(math.nextafter(node.finish, math.inf), next_wake(child))
+        return min(math.nextafter(timeout.finish, math.inf), next_wake(timeout.decorated))
     if kind in _PURE_DECORATORS:
-        child = node.decorated
+        child = cast(py_trees.decorators.Decorator, node).decorated
         return next_wake(child) if child.status is Status.RUNNING else NOW
     return NOW

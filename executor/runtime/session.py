@@ -20,7 +20,14 @@ from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun
-from executor.simulation import SimulationClock, SimulationError, WallClock, reset_arguments, simulation_dt
+from executor.simulation import (
+    Clock,
+    SimulationClock,
+    SimulationError,
+    WallClock,
+    reset_arguments,
+    simulation_dt,
+)
 
 #: The message of a scenario that an abort kept from starting.
 NOT_STARTED = "not run: the run was aborted before this scenario started"
@@ -32,7 +39,7 @@ class SessionOptions:
     def __init__(self, tick_period: float = 0.1, simulation: object | None = None, input_dir: str | None = None,
                  output_root: str | None = None, observer_factory: Callable[[str], list] | None = None,
                  debug: bool = False,
-                 on_result: Callable[[list[ScenarioResult]], None] | None = None) -> None:
+                 on_result: Callable[[list[ScenarioResult]], object] | None = None) -> None:
         self.tick_period = tick_period
         self.simulation = simulation
         self.input_dir = input_dir
@@ -81,7 +88,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
     outcome = SessionOutcome()
     results = outcome.results
     simulation = options.simulation
-    sim_clock = None
+    sim_clock: SimulationClock | None = None      # set exactly when there is a simulation
     on_result = options.on_result
     external_methods.provide()
     with abort_on_signals():
@@ -112,7 +119,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                             on_result(results)
                         continue
                 external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
-                if simulation is not None:
+                if simulation is not None and sim_clock is not None:
                     failure = _reset_simulation(simulation, run)
                     if failure is not None:
                         logger.error(f"Scenario '{run.name}' failed: {failure.message}")
@@ -121,13 +128,14 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                             on_result(results)
                         continue
                     sim_clock.reset()
+                clock: Clock = sim_clock if sim_clock is not None else WallClock()
                 context = ScenarioContext(
-                    name=run.name, clock=sim_clock if simulation is not None else WallClock(),
+                    name=run.name, clock=clock,
                     logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
                     simulation=simulation)
                 observers = options.observer_factory(run.name) if options.observer_factory else []
                 runner = ScenarioRunner(run.scenario, context, name=run.name,
-                                        tick_period=sim_clock.dt if simulation is not None else options.tick_period,
+                                        tick_period=sim_clock.dt if sim_clock is not None else options.tick_period,
                                         simulation=simulation, observers=observers)
                 try:
                     results.append(runner.run())

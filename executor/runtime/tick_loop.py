@@ -23,7 +23,7 @@ from executor.actions.base import ActionError
 from executor.results import ScenarioResult
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
-from executor.simulation import SimulationError, SimulationStepError
+from executor.simulation import SimulationClock, SimulationError, SimulationStepError
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]
 
@@ -102,6 +102,7 @@ class ScenarioRunner:
 
     def _tick_loop(self) -> Status:
         root = self.root
+        assert root is not None, "set up before ticking"
         simulation = self.simulation
         observers = self.observers
         if simulation is not None:
@@ -136,6 +137,7 @@ class ScenarioRunner:
         from executor.runtime.quiescence import next_wake
 
         clock = self.context.clock
+        assert isinstance(clock, SimulationClock), "a simulation runs on a simulation clock"
         step = simulation.step
         advance = clock.advance
         now = clock.now

@@ -254,3 +254,65 @@ def test_ctrl_c_stops_builtin_jobs_and_resume_finishes(tmp_path):
     resumed = run_cli(["-o", "res", "--resume", "-j", "2"], tmp_path, env, timeout=120)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert os.path.exists(tmp_path / "res/job5/test.xml")
+
+
+# A module of the scenario's folder named like one the standard library has (and the entry-point lookup
+# loads), a job that leaves a thread running when its scenario ends, and one killed after writing to both
+# streams: what the interpreter does at start and at its end must be what the forked job does.
+INTERPRETER_MODULE = '''
+import os, signal, sys, threading, time
+
+def act(name):
+    if name == "thread":
+        def late():
+            time.sleep(0.3)
+            fd = os.open(os.environ["BATCH_LEDGER"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+            os.write(fd, b"thread ended\\n")
+            os.close(fd)
+        threading.Thread(target=late).start()
+    if name == "killed":
+        print("out before the kill")
+        sys.stderr.write("err before the kill\\n")
+        print("out again")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return "the scenario folder's calendar"
+'''
+
+
+@pytest.mark.parametrize("unbuffered", [True, False], ids=["unbuffered", "buffered"])
+def test_builtin_jobs_start_and_end_as_a_fresh_interpreter(tmp_path, unbuffered):
+    (tmp_path / "src").mkdir()
+    (tmp_path / "src" / "calendar.py").write_text(INTERPRETER_MODULE)
+    (tmp_path / "src" / "job.osc").write_text("""import osc.helpers
+
+struct folder:
+    def act(name: string) -> string is external calendar.act()
+
+scenario job:
+    name: string = "x"
+    keep(name in ["plain", "thread", "killed"])
+    do serial:
+        log(folder.act(name))
+""")
+    env = cli_env(tmp_path)
+    if not unbuffered:
+        env.pop("PYTHONUNBUFFERED")
+    made = subprocess.run([str(BIN / "scenario_variation"), "src/job.osc", "-o", "out"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True)
+    assert made.returncode == 0, made.stdout + made.stderr
+    builtin = run_cli(["-i", "out", "-o", "builtin", "-j", "2"], tmp_path, env)
+    launched = run_cli(["-i", "out", "-o", "launched", "-j", "2", "--", str(BIN / "scenario_execution"),
+                        "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"], tmp_path, env)
+    assert builtin.returncode == launched.returncode == 1, builtin.stdout + builtin.stderr
+    logs = {}
+    for job in ("job0", "job1", "job2"):
+        one, other = (tmp_path / runner / job / "log.txt" for runner in ("builtin", "launched"))
+        logs[job] = one.read_text()
+        assert one.read_bytes() == other.read_bytes(), job
+    assert "the scenario folder's calendar" in logs["job0"]          # its own module, not the library's
+    assert (tmp_path / "ledger.txt").read_text() == "thread ended\n" * 2   # the job waited for its thread
+    killed = logs["job2"]
+    assert "err before the kill" in killed
+    assert ("out before the kill" in killed) is unbuffered           # nothing written is lost, unbuffered
+    if unbuffered:
+        assert killed.index("out before") < killed.index("err before") < killed.index("out again")

@@ -29,7 +29,7 @@ import threading
 from collections.abc import Mapping, Sequence
 from typing import BinaryIO
 
-from executor.batch.fork_server import receive, send
+from executor.batch.fork_server import command_target, receive, send
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
 BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}")
@@ -116,10 +116,16 @@ class ForkServer:
         """Start the server and wait until it is ready; :class:`ForkServerError` if it cannot be."""
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         script_dir = os.path.dirname(sys.executable)
-        code = ("import sys; sys.path[0] = sys.argv[1]; "
-                "from executor.batch.fork_server import serve; serve(int(sys.argv[2]), sys.argv[3] == 'spare')")
+        code = ("import sys; sys.path[0] = sys.argv[1]; from executor.batch.fork_server import serve; "
+                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4] == 'spare')")
         try:
-            self.proc = subprocess.Popen([sys.executable, "-c", code, script_dir, str(theirs.fileno()),
+            target = command_target()
+        except RuntimeError as exc:
+            mine.close()
+            theirs.close()
+            raise ForkServerError(f"the built-in runner cannot start: {exc}") from None
+        try:
+            self.proc = subprocess.Popen([sys.executable, "-c", code, script_dir, str(theirs.fileno()), target,
                                           "spare" if self.keep_spare else "no-spare"],
                                          pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, env=self.environment,

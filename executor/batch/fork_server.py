@@ -45,6 +45,21 @@ MAX_MESSAGE = 64 * 1024
 ENTRY_POINT = ("scenario_execution", "console_scripts")
 
 
+def command_target() -> str:
+    """Where the console script ``scenario_execution`` points (``module:function``), looked up in the
+    runner: the lookup (``importlib.metadata``) imports ``email``, ``zipfile``, ``csv``, ``calendar`` and
+    more, which a launched ``scenario_execution`` never loads. Had the server loaded them, a job's
+    own ``calendar.py`` beside its scenario would lose to the server's copy and the job differ from
+    the launched command."""
+    from importlib.metadata import entry_points
+
+    name, group = ENTRY_POINT
+    found = [ep for ep in entry_points(group=group) if ep.name == name]
+    if not found:
+        raise RuntimeError(f"the console script {name!r} is not installed")
+    return found[0].value
+
+
 def send(sock: socket.socket, message: dict, fds: list[int] | None = None) -> None:
     """One JSON message, with file descriptors attached when given."""
     data = json.dumps(message).encode()
@@ -72,20 +87,20 @@ def receive(sock: socket.socket, max_fds: int = 0) -> tuple[dict | None, list[in
 # ------------------------------------------------------------------------------ in the server
 
 class Command:
-    """The ``scenario_execution`` console script, found by name (this package never imports the
-    command layer): its ``main``, the path of its script, and its ``run_job(scenario, output_dir)``
-    when the command offers one (the same run without parsing the command line in every job)."""
+    """The ``scenario_execution`` console script, imported from where it points (``target``, as
+    :func:`command_target` found it; this package never imports the command layer): its ``main``,
+    the path of its script, and its ``run_job(scenario, output_dir)`` when the command offers one
+    (the same run without parsing the command line in every job)."""
 
-    def __init__(self) -> None:
+    def __init__(self, target: str) -> None:
+        import importlib
         import shutil
-        from importlib.metadata import entry_points
 
-        name, group = ENTRY_POINT
-        found = [ep for ep in entry_points(group=group) if ep.name == name]
-        if not found:
-            raise RuntimeError(f"the console script {name!r} is not installed")
-        self.main = found[0].load()
-        self.job = getattr(sys.modules.get(self.main.__module__), "run_job", None)
+        module_name, _, attribute = target.partition(":")
+        module = importlib.import_module(module_name)
+        self.main = getattr(module, attribute)
+        self.job = getattr(module, "run_job", None)
+        name = ENTRY_POINT[0]
         self.script = shutil.which(name) or os.path.join(os.path.dirname(sys.executable), name)
 
     def run(self, argv: list[str]) -> None:
@@ -152,22 +167,27 @@ def preload(command: Command) -> None:
 
 
 def _fresh_stdio() -> None:
-    """``sys.stdin/stdout/stderr`` on fds 0-2 as a new interpreter makes them (buffering and all)."""
+    """``sys.stdin/stdout/stderr`` on fds 0-2 as a new interpreter makes them (buffering and all):
+    stdout block-buffered (line-buffered on a terminal), stderr line-buffered; with
+    ``PYTHONUNBUFFERED`` both write straight to the file descriptor, with no buffer in between, so
+    nothing written is lost when the job is killed."""
     import io
 
     unbuffered = bool(os.environ.get("PYTHONUNBUFFERED"))
     old = {name: getattr(sys, name) for name in ("stdin", "stdout", "stderr")}
 
-    def stream(fd: int, mode: str, like, line_buffering: bool):
-        raw = io.FileIO(fd, mode, closefd=False)
-        if mode == "r":
-            return io.TextIOWrapper(io.BufferedReader(raw), encoding=like.encoding, errors=like.errors)
-        buffered = io.BufferedWriter(raw)
-        return io.TextIOWrapper(buffered, encoding=like.encoding, errors=like.errors,
-                                line_buffering=line_buffering or os.isatty(fd), write_through=unbuffered)
+    def stream(fd: int, like) -> io.TextIOWrapper:
+        if fd == 0:
+            return io.TextIOWrapper(io.BufferedReader(io.FileIO(fd, "r", closefd=False)),
+                                    encoding=like.encoding, errors=like.errors)
+        raw = io.FileIO(fd, "w", closefd=False)
+        if unbuffered:
+            return io.TextIOWrapper(raw, encoding=like.encoding, errors=like.errors, write_through=True)
+        return io.TextIOWrapper(io.BufferedWriter(raw), encoding=like.encoding, errors=like.errors,
+                                line_buffering=fd == 2 or os.isatty(fd))
 
-    for fd, name, line_buffering in ((0, "stdin", False), (1, "stdout", False), (2, "stderr", True)):
-        fresh = stream(fd, "r" if fd == 0 else "w", old[name], line_buffering)
+    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
+        fresh = stream(fd, old[name])
         setattr(sys, name, fresh)          # the job's own streams, also as sys.__stdin__ & co.
         setattr(sys, f"__{name}__", fresh)
 
@@ -189,7 +209,7 @@ def _run_child(request: dict, output_fd: int, server: _Server, held_back: bool =
     ``held_back``: a spare's stop signals are blocked; they are let through once the command runs
     (one that came meanwhile is delivered then, as if it came at the job's first instruction).
     """
-    code = 1
+    code, interrupted = 1, False
     try:
         if os.getpgid(0) != os.getpid():     # a spare made its own session already
             os.setsid()
@@ -216,21 +236,39 @@ def _run_child(request: dict, output_fd: int, server: _Server, held_back: bool =
             code = 0
         except SystemExit as exc:
             code = _exit_code(exc)
-        except KeyboardInterrupt:
-            code = 128 + signal.SIGINT
         except BaseException:  # noqa: BLE001 - what the interpreter would print for an uncaught error
+            interrupted = isinstance(sys.exc_info()[1], KeyboardInterrupt)
             sys.excepthook(*sys.exc_info())
             code = 1
-        import atexit
-
-        atexit._run_exitfuncs()
+        code = _finalize(code)
     finally:
-        for name in ("stdout", "stderr"):
-            try:
-                getattr(sys, name).flush()
-            except Exception:  # noqa: BLE001, S110 - the output may be gone; the exit status still counts
-                pass
+        if interrupted:                    # as the interpreter ends on an uncaught Ctrl-C: by SIGINT
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGINT)
         os._exit(code)
+
+
+def _finalize(code: int) -> int:
+    """The end of an interpreter's life, in its order: wait for the threads that are not daemons,
+    run the ``atexit`` functions, flush the standard streams. Returns the exit status, 120 when
+    stdout cannot be flushed (as the interpreter's own end reports it)."""
+    import atexit
+    import threading
+
+    try:
+        threading._shutdown()              # type: ignore[attr-defined]  # the interpreter's own join
+    except BaseException:  # noqa: BLE001 - as the interpreter does: say it, and go on ending
+        sys.excepthook(*sys.exc_info())
+    atexit._run_exitfuncs()
+    try:
+        sys.stdout.flush()
+    except Exception:  # noqa: BLE001 - the output is gone (a full disk): the status says so
+        code = 120
+    try:
+        sys.stderr.flush()
+    except Exception:  # noqa: BLE001, S110 - as the interpreter, a failing stderr is not reported
+        pass
+    return code
 
 
 class _Spare:
@@ -278,7 +316,7 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
 class _Server:
     """The serving loop: requests from the runner, children reaped, all single-threaded."""
 
-    def __init__(self, sock: socket.socket, keep_spare: bool = False) -> None:
+    def __init__(self, sock: socket.socket, target: str, keep_spare: bool = False) -> None:
         self.sock = sock
         self.keep_spare = keep_spare
         self.spare: _Spare | None = None
@@ -287,7 +325,7 @@ class _Server:
         self.wake_read, self.wake_write = os.pipe()
         os.set_blocking(self.wake_write, False)
         os.set_blocking(self.wake_read, False)
-        self.command = Command()
+        self.command = Command(target)
 
     def serve(self) -> None:
         signal.signal(signal.SIGCHLD, lambda *_: None)
@@ -417,14 +455,15 @@ class _Server:
                 send(self.sock, {"id": job, "event": "exited", "pid": pid, "status": status})
 
 
-def serve(fd: int, keep_spare: bool = False) -> None:
-    """Entry of the server process: ``fd`` is its end of the socket pair; ``keep_spare``: keep a warm
-    spare child (the runner has a core to spare)."""
+def serve(fd: int, target: str, keep_spare: bool = False) -> None:
+    """Entry of the server process: ``fd`` is its end of the socket pair; ``target`` the command's
+    ``module:function`` (:func:`command_target`); ``keep_spare``: keep a warm spare child (the runner
+    has a core to spare)."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)          # the runner decides; its children are in their own groups
     sock = socket.socket(fileno=fd)
     try:
-        server = _Server(sock, keep_spare)
+        server = _Server(sock, target, keep_spare)
         preload(server.command)
     except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
         send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})

@@ -316,3 +316,53 @@ scenario job:
     assert ("out before the kill" in killed) is unbuffered           # nothing written is lost, unbuffered
     if unbuffered:
         assert killed.index("out before") < killed.index("err before") < killed.index("out again")
+
+
+SPAN_MODULE = '''
+import os, time
+
+def span(name):
+    began = time.time()
+    time.sleep(0.15)
+    line = "%s %.6f %.6f\\n" % (name, began, time.time())
+    fd = os.open(os.environ["BATCH_LEDGER"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    os.write(fd, line.encode())
+    os.close(fd)
+    return name
+'''
+
+
+@pytest.mark.parametrize("launched", [False, True], ids=["builtin", "launched"])
+def test_never_more_jobs_at_once_than_slots(tmp_path, launched):
+    """-j 2: two jobs run side by side, and at no moment three (12 jobs of 0.15 s each)."""
+    (tmp_path / "src").mkdir()
+    (tmp_path / "src" / "span_mod.py").write_text(SPAN_MODULE)
+    names = ", ".join(f'"s{i}"' for i in range(12))
+    (tmp_path / "src" / "job.osc").write_text(f"""import osc.helpers
+
+struct spans:
+    def span(name: string) -> string is external span_mod.span()
+
+scenario job:
+    name: string = "x"
+    keep(name in [{names}])
+    do serial:
+        log(spans.span(name))
+""")
+    env = cli_env(tmp_path)
+    made = subprocess.run([str(BIN / "scenario_variation"), "src/job.osc", "-o", "out"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True)
+    assert made.returncode == 0, made.stdout + made.stderr
+    command = ["--", str(BIN / "scenario_execution"), "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"] if launched \
+        else []
+    done = run_cli(["-i", "out", "-o", "res", "-j", "2", *command], tmp_path, env)
+    assert done.returncode == 0, done.stdout + done.stderr
+    events = []
+    for _name, began, ended in (line.split() for line in (tmp_path / "ledger.txt").read_text().splitlines()):
+        events += [(float(began), 1), (float(ended), -1)]
+    assert len(events) == 24
+    running = most = 0
+    for _at, step in sorted(events):
+        running += step
+        most = max(most, running)
+    assert most == 2

@@ -9,6 +9,7 @@ whether one job's state reached the next.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sqlite3
@@ -59,6 +60,7 @@ struct probe:
 scenario job:
     name: string = "x"
     keep(name in [{listed}])
+    cover(name)
     do serial:
         log(probe.record(name, {pause}))
         check: compare(left_value: name, operator: "!=", right_value: "fail")
@@ -125,6 +127,11 @@ def test_builtin_and_launched_runs_give_the_same_results(tmp_path, slots):
         assert (one / "log.txt").read_bytes() == (other / "log.txt").read_bytes(), index
         if (one / "test.xml").exists():
             assert _normal((one / "test.xml").read_text()) == _normal((other / "test.xml").read_text())
+        if index < 49:                                         # the crashed job wrote none
+            ours, theirs = (json.loads((folder / "coverage.json").read_text()) for folder in (one, other))
+            for run in (ours["run"], theirs["run"]):
+                run.pop("duration")
+            assert ours == theirs and ours["run"]["assignment"] == {"job.name": names[index]}, index
     # user code ran in each job, never in the parent: imported there, called once, saw no other job's state
     ledger = records(tmp_path)
     assert len(ledger) == 100

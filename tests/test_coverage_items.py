@@ -112,6 +112,22 @@ def test_variants_merge_into_exact_buckets_grades_and_holes(tmp_path):
                                                                                        "2": (3, 100.0)}
 
 
+def test_a_variant_run_says_which_file_and_which_values_it_ran(tmp_path):
+    varied = CUT_IN.replace("        keep(it == 50kph)\n", "        keep(it in [30kph, 90kph])\n")
+    (tmp_path / "cut_in.osc").write_text(varied)
+    assert run(str(BIN / "scenario_variation"), "cut_in.osc", "-o", "out", cwd=tmp_path).returncode == 0
+    header = (tmp_path / "out" / "cut_in1.sce").read_text().split("assignment:\n", 1)[1].splitlines()[0]
+    assert execute(tmp_path, "out/cut_in1.sce", "-o", "r").returncode == 0
+    variant = json.loads((tmp_path / "r" / "coverage.json").read_text())["run"]
+    assert (variant["source"], variant["variant"]) == ("out/cut_in1.sce", "cut_in1")
+    assert variant["assignment"] == {"cut_in.speed": "90kph"} and header.strip() == '"cut_in.speed": "90kph"'
+    assert execute(tmp_path, "cut_in.osc", "-o", "plain").returncode == 1      # keep(in) needs a variant
+    (tmp_path / "one.osc").write_text(CUT_IN)
+    assert execute(tmp_path, "one.osc", "-o", "one").returncode == 0
+    plain = json.loads((tmp_path / "one" / "coverage.json").read_text())["run"]
+    assert (plain["source"], plain.get("variant"), plain["assignment"]) == ("one.osc", None, {})
+
+
 @pytest.mark.parametrize(("member", "message", "line", "column"), [
     ("    cover(side)\n    cover(both, items: [side, nothing])\n", "cross 'both': no cover item 'nothing'", 6, 5),
     ("    cover(g, expression: gap, every: 2)\n", "every: needs a range:", 5, 31),

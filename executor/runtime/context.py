@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 from coverage_engine.resolve.evaluate import evaluate
 from coverage_engine.resolve.model import Expr, Scenario
 from executor.runtime.logger import Logger
+from executor.runtime.planned_runs import RunOrigin
 
 if TYPE_CHECKING:
     from executor.runtime.coverage_sampling import CoverageSampler
@@ -47,13 +48,15 @@ class ScenarioContext:
     """
 
     def __init__(self, name: str, clock: Clock, logger: Logger, input_dir: str | None = None,
-                 output_dir: str | None = None, simulation: object | None = None) -> None:
+                 output_dir: str | None = None, simulation: object | None = None,
+                 origin: RunOrigin | None = None) -> None:
         self.name = name
         self.clock = clock
         self.logger = logger
         self.input_dir = input_dir
         self.output_dir = output_dir
         self.simulation = simulation
+        self.origin = origin
         self.variables: dict[str, object] = {}
         self.events: set[str] = set()
         self.processes: dict[str, list] = {}

@@ -23,6 +23,7 @@ from coverage_engine.coverage.run_file import ItemSamples, RunCoverageBuilder, w
 from coverage_engine.coverage.values import ValueType
 from coverage_engine.resolve.evaluate import evaluate
 from coverage_engine.resolve.model import CoverageItem, Scenario, VariableRef
+from executor.runtime.planned_runs import RunOrigin
 
 #: JUnit property values longer than this are cut (a record item sampled every tick).
 PROPERTY_CHARS = 200
@@ -31,11 +32,15 @@ PROPERTY_CHARS = 200
 class CoverageSampler:
     """The items of one run, their samplers, and when each is sampled."""
 
-    def __init__(self, scenario: Scenario, variables: dict[str, object], *, run_name: str | None = None) -> None:
+    def __init__(self, scenario: Scenario, variables: dict[str, object], *, run_name: str | None = None,
+                 origin: RunOrigin | None = None) -> None:
         self.scenario = scenario
         self.variables = variables
         self.run_name = run_name or scenario.name
-        self.builder = RunCoverageBuilder(scenario.name, variant=run_name if run_name != scenario.name else None)
+        # a run of one parameter document is named after it; else a variant is its .sce file's name
+        variant = self.run_name if self.run_name != scenario.name else origin.variant if origin else None
+        self.builder = RunCoverageBuilder(scenario.name, source=origin.source if origin else None, variant=variant,
+                                          assignment=origin.assignment if origin else None)
         self._items: dict[str, tuple[CoverageItem, ItemSamples]] = {}
         self._by_event: dict[str, list[tuple[CoverageItem, ItemSamples]]] = {}
         declared = {item.name: item for item in scenario.coverage}

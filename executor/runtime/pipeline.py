@@ -114,19 +114,25 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
     return loaded
 
 
-def report_names(scenario: str, runs=()):
-    """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header)."""
+def _variant(scenario: str):
+    """The ``.sce`` document of a variant (None for an ``.osc``, or a ``.sce`` that cannot be read)."""
+    if not scenario.endswith(".sce"):
+        return None
+    from coverage_engine.files.sce import read_sce
+
+    try:
+        return read_sce(scenario)
+    except OscError:
+        return None
+
+
+def report_names(scenario: str, runs=(), document=None):
+    """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header,
+    ``document`` when it was read already)."""
     from executor.junit import report_names as names_for
 
-    variant = None
-    if scenario.endswith(".sce"):
-        from coverage_engine.files.sce import read_sce
-
-        try:
-            document = read_sce(scenario)
-            variant = (document.source, document.scenario, document.assignment)
-        except OscError:
-            variant = None
+    document = document or _variant(scenario)
+    variant = (document.source, document.scenario, document.assignment) if document is not None else None
     return names_for(scenario, [(run.name, run.scenario.name) for run in runs], variant)
 
 
@@ -179,7 +185,7 @@ def execute(request: ExecutionRequest) -> int:
 
 def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
     from coverage_engine.resolve.evaluate import add_import_paths
-    from executor.runtime.planned_runs import plan_runs
+    from executor.runtime.planned_runs import RunOrigin, plan_runs
     from executor.runtime.session import SessionOptions, run_session
 
     scenario_dir = os.path.dirname(os.path.abspath(request.scenario))
@@ -189,7 +195,10 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     if request.scenario.endswith(".sce") and model_dirs and os.path.isdir(model_dirs[0]):
         scenario_dir = os.path.abspath(model_dirs[0])  # a variant's files (maps, models) sit beside its source
     runs = plan_runs(loaded, output_root)
-    names = report_names(request.scenario, runs) if output_root else None
+    document = _variant(request.scenario)
+    names = report_names(request.scenario, runs, document) if output_root else None
+    origin = RunOrigin(request.scenario, os.path.splitext(os.path.basename(request.scenario))[0]
+                       if document is not None else None, document.assignment if document is not None else None)
     if not runs:
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED
@@ -228,7 +237,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     options = SessionOptions(tick_period=request.step_duration, simulation=simulation, input_dir=scenario_dir,
                              output_root=output_root, debug=request.debug,
                              observer_factory=live.observers if live else None,
-                             on_result=report.update if report else None)
+                             on_result=report.update if report else None, origin=origin)
     try:
         outcome = run_session(runs, options, logger)
     finally:

@@ -19,6 +19,18 @@ from coverage_engine.resolve.model import Scenario, ScenarioFile
 from coverage_engine.resolve.overrides import OUTPUT_DIR_KEY
 
 
+class RunOrigin:
+    """Where a run comes from, as its ``coverage.json`` tells: the file that was run (as given on the
+    command line), the variant's name (a ``.sce`` file's stem) and its assignment (the varied
+    parameters and their values, from the ``.sce`` header; empty for an ``.osc``)."""
+
+    def __init__(self, source: str | None = None, variant: str | None = None,
+                 assignment: dict[str, object] | None = None) -> None:
+        self.source = source
+        self.variant = variant
+        self.assignment = dict(assignment or {})
+
+
 class PlannedRun:
     """One scenario run: the resolved scenario, its result name and its output directory."""
 

@@ -19,7 +19,7 @@ from executor.results import ScenarioResult
 from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
-from executor.runtime.planned_runs import PlannedRun
+from executor.runtime.planned_runs import PlannedRun, RunOrigin
 from executor.simulation import (
     Clock,
     SimulationClock,
@@ -39,7 +39,8 @@ class SessionOptions:
     def __init__(self, tick_period: float = 0.1, simulation: object | None = None, input_dir: str | None = None,
                  output_root: str | None = None, observer_factory: Callable[[str], list] | None = None,
                  debug: bool = False,
-                 on_result: Callable[[list[ScenarioResult]], object] | None = None) -> None:
+                 on_result: Callable[[list[ScenarioResult]], object] | None = None,
+                 origin: RunOrigin | None = None) -> None:
         self.tick_period = tick_period
         self.simulation = simulation
         self.input_dir = input_dir
@@ -47,6 +48,7 @@ class SessionOptions:
         self.observer_factory = observer_factory
         self.debug = debug
         self.on_result = on_result
+        self.origin = origin                 # the file run, for each run's coverage.json
 
 
 class SessionOutcome:
@@ -132,7 +134,7 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                 context = ScenarioContext(
                     name=run.name, clock=clock,
                     logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
-                    simulation=simulation)
+                    simulation=simulation, origin=options.origin)
                 observers = options.observer_factory(run.name) if options.observer_factory else []
                 runner = ScenarioRunner(run.scenario, context, name=run.name,
                                         tick_period=sim_clock.dt if sim_clock is not None else options.tick_period,

@@ -89,7 +89,8 @@ class ScenarioRunner:
         if self.scenario.coverage:
             from executor.runtime.coverage_sampling import CoverageSampler
 
-            context.coverage = CoverageSampler(self.scenario, context.variables, run_name=self.name)
+            context.coverage = CoverageSampler(self.scenario, context.variables, run_name=self.name,
+                                               origin=context.origin)
         self.root = build_tree(self.scenario, context)
         self.root.name = self.name
         kwargs = dict(self.setup_kwargs, logger=context.logger, input_dir=context.input_dir,

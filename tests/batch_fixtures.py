@@ -111,10 +111,30 @@ def run_cli(args: list[str], cwd: Path, env: dict[str, str] | None = None,
                           timeout=timeout)
 
 
+#: Runners started in the background by the running test; ``end_started`` ends what a failed test left.
+STARTED: list[subprocess.Popen] = []
+
+
 def start_cli(args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.Popen:
     """Start the real console script in the background (for kill and interrupt tests)."""
-    return subprocess.Popen([CLI, *args], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True)
+    process = subprocess.Popen([CLI, *args], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    STARTED.append(process)
+    return process
+
+
+def end_started() -> None:
+    """Kill and reap every runner a test started and left running (a failed assertion leaves one behind,
+    and its unclosed pipe would otherwise be reported as a warning in whichever test runs next)."""
+    while STARTED:
+        process = STARTED.pop()
+        if process.poll() is None:
+            process.kill()
+        try:
+            process.communicate(timeout=10)
+        except subprocess.TimeoutExpired:          # a child that outlived it still holds the pipe
+            if process.stdout is not None:
+                process.stdout.close()
 
 
 def ledger(tmp_path: Path) -> Counter:

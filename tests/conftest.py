@@ -20,3 +20,11 @@ os.environ.setdefault("NO_COLOR", "1")
 def project_root() -> Path:
     """The repository root (examples/, benchmarks/ live there)."""
     return ROOT
+
+
+@pytest.fixture(autouse=True)
+def _end_background_runners():
+    """A runner a test started in the background never outlives the test, even when the test fails."""
+    yield
+    from batch_fixtures import end_started
+    end_started()

@@ -188,6 +188,9 @@ def _worker_id(store: Path) -> str:
 def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, launched, slots):
     names = [f"k{i}" for i in range(40)]
     env = make_variants(tmp_path, names, pause=0.3)
+    scratch = tmp_path / "tmp"                       # the runner's temporary folders go here
+    scratch.mkdir()
+    env["TMPDIR"] = str(scratch)
     command = ["--", str(BIN / "scenario_execution"), "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}"] if launched \
         else []
     runner = start_cli(["-i", "out", "-o", "res", "-j", slots, *command], tmp_path, env)
@@ -201,11 +204,15 @@ def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, la
     while not marked(mark):
         assert time.monotonic() < deadline and runner.poll() is None, "the batch's processes carry the mark"
         time.sleep(0.01)
+    assert launched or any(scratch.iterdir()), "the fork server's scratch folder is where TMPDIR says"
     runner.send_signal(signal.SIGKILL)
     runner.communicate(timeout=10)
     killed_at = time.monotonic()
     while marked(mark):
         assert time.monotonic() - killed_at < 3, f"alive 3 s after kill -9: {marked(mark)}"
+        time.sleep(0.05)
+    while any(scratch.iterdir()):                    # and so are the runner's temporary folders
+        assert time.monotonic() - killed_at < 5, f"left behind: {sorted(p.name for p in scratch.iterdir())}"
         time.sleep(0.05)
     finished = _finished_jobs(tmp_path)
     assert 0 < len(finished) < 40

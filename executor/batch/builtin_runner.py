@@ -21,12 +21,14 @@ from __future__ import annotations
 
 import itertools
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
 from executor.batch.fork_server import command_target, receive, send
@@ -93,11 +95,19 @@ class _Pending:
 
 
 class ForkServer:
-    """The worker's handle on its fork server: start it, spawn jobs, stop it."""
+    """The worker's handle on its fork server: start it, spawn jobs, stop it.
 
-    def __init__(self, environment: Mapping[str, str] | None = None, *, keep_spare: bool = False) -> None:
+    The server's probe runs write to a private folder this side makes and removes (``scratch``);
+    ``on_scratch`` is told its path as soon as it exists (the worker's watchdog removes it should this
+    process be killed).
+    """
+
+    def __init__(self, environment: Mapping[str, str] | None = None, *, keep_spare: bool = False,
+                 on_scratch: Callable[[str], None] | None = None) -> None:
         self.environment = dict(os.environ if environment is None else environment)
         self.keep_spare = keep_spare
+        self.on_scratch = on_scratch
+        self.scratch: str | None = None
         self.proc: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._lock = threading.Lock()              # one request on the socket at a time
@@ -117,16 +127,19 @@ class ForkServer:
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         script_dir = os.path.dirname(sys.executable)
         code = ("import sys; sys.path[0] = sys.argv[1]; from executor.batch.fork_server import serve; "
-                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4] == 'spare')")
+                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5] == 'spare')")
         try:
             target = command_target()
-        except RuntimeError as exc:
+            self.scratch = tempfile.mkdtemp(prefix="scenario_fork_server_")
+        except (RuntimeError, OSError) as exc:
             mine.close()
             theirs.close()
             raise ForkServerError(f"the built-in runner cannot start: {exc}") from None
+        if self.on_scratch is not None:
+            self.on_scratch(self.scratch)
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, script_dir, str(theirs.fileno()), target,
-                                          "spare" if self.keep_spare else "no-spare"],
+                                          self.scratch, "spare" if self.keep_spare else "no-spare"],
                                          pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, env=self.environment,
                                          start_new_session=True, close_fds=True)
@@ -236,11 +249,13 @@ class ForkServer:
         self._end_process()
 
     def _end_process(self) -> None:
-        if self.proc is None:
-            return
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-        self.proc = None
+        if self.proc is not None:
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+            self.proc = None
+        if self.scratch is not None:     # what the probe runs left, a spare's killed while it warmed up
+            shutil.rmtree(self.scratch, ignore_errors=True)
+            self.scratch = None

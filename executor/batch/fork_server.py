@@ -153,13 +153,13 @@ def run_probe(command: Command, folder: str) -> None:
 PRELOAD_RUNS = 10
 
 
-def preload(command: Command) -> None:
-    """Run the probe (every lazily imported module loaded, every library parsed, the code a job runs
-    specialized), then freeze what was made."""
+def preload(command: Command, scratch: str) -> None:
+    """Run the probe in a folder under ``scratch`` (every lazily imported module loaded, every library
+    parsed, the code a job runs specialized), then freeze what was made."""
     import gc
     import tempfile
 
-    with tempfile.TemporaryDirectory(prefix="scenario_fork_server_") as folder:
+    with tempfile.TemporaryDirectory(prefix="preload_", dir=scratch) as folder:
         for _ in range(PRELOAD_RUNS):
             run_probe(command, folder)
     gc.collect()
@@ -316,11 +316,11 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
 class _Server:
     """The serving loop: requests from the runner, children reaped, all single-threaded."""
 
-    def __init__(self, sock: socket.socket, target: str, keep_spare: bool = False) -> None:
+    def __init__(self, sock: socket.socket, target: str, scratch: str, keep_spare: bool = False) -> None:
         self.sock = sock
         self.keep_spare = keep_spare
         self.spare: _Spare | None = None
-        self.scratch: str | None = None                # where spares run the probe (removed at the end)
+        self.scratch = scratch                         # the runner's folder for probe runs (it removes it)
         self.children: dict[int, str] = {}           # pid -> request id
         self.wake_read, self.wake_write = os.pipe()
         os.set_blocking(self.wake_write, False)
@@ -331,9 +331,6 @@ class _Server:
         signal.signal(signal.SIGCHLD, lambda *_: None)
         signal.set_wakeup_fd(self.wake_write)
         if self.keep_spare:
-            import tempfile
-
-            self.scratch = tempfile.mkdtemp(prefix="scenario_fork_server_")
             self._new_spare()
         try:
             while True:
@@ -373,10 +370,6 @@ class _Server:
                 os.waitpid(spare.pid, 0)
             except ChildProcessError:
                 pass
-        if self.scratch is not None:             # a spare killed while warming up leaves its probe run
-            import shutil
-
-            shutil.rmtree(self.scratch, ignore_errors=True)
 
     def _spawn(self, request: dict, fds: list[int]) -> None:
         if len(fds) != 1:
@@ -455,16 +448,17 @@ class _Server:
                 send(self.sock, {"id": job, "event": "exited", "pid": pid, "status": status})
 
 
-def serve(fd: int, target: str, keep_spare: bool = False) -> None:
+def serve(fd: int, target: str, scratch: str, keep_spare: bool = False) -> None:
     """Entry of the server process: ``fd`` is its end of the socket pair; ``target`` the command's
-    ``module:function`` (:func:`command_target`); ``keep_spare``: keep a warm spare child (the runner
-    has a core to spare)."""
+    ``module:function`` (:func:`command_target`); ``scratch`` a private folder of the runner's for the
+    probe runs (the runner removes it, or its watchdog after a ``kill -9``); ``keep_spare``: keep a warm
+    spare child (the runner has a core to spare)."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)          # the runner decides; its children are in their own groups
     sock = socket.socket(fileno=fd)
     try:
-        server = _Server(sock, target, keep_spare)
-        preload(server.command)
+        server = _Server(sock, target, scratch, keep_spare)
+        preload(server.command, scratch)
     except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
         send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
         raise SystemExit(1) from None

@@ -119,6 +119,7 @@ class Worker:
         self._started = 0
         self._unsure_claims = False
         self._fork_server: ForkServer | None = None
+        self._watchdog: Watchdog | None = None        # set while run() runs
         self._folders = JobFolders()
         self._started_due: float | None = None   # when the oldest held start record is to be written
 
@@ -136,7 +137,7 @@ class Worker:
         jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone). Should
         this process die (``kill -9``), its watchdog ends every process it started.
         """
-        watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
+        watchdog = self._watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
         gc.collect()
         gc.freeze()      # what exists now (imports, the batch) is not scanned while the loop runs
         try:
@@ -154,6 +155,7 @@ class Worker:
                 self._fork_server = None
             if watchdog is not None:
                 watchdog.release()
+                self._watchdog = None
 
     @property
     def mark(self) -> str:
@@ -167,7 +169,9 @@ class Worker:
                 self._fork_server.close()
                 self._fork_server = None
             self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id},
-                                           keep_spare=spare_cores(self.settings.slots)).start()
+                                           keep_spare=spare_cores(self.settings.slots),
+                                           on_scratch=self._watchdog.remove_on_death if self._watchdog else None,
+                                           ).start()
         return self._fork_server
 
     def _loop(self) -> WorkerSummary:

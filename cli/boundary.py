@@ -65,7 +65,15 @@ class Boundary:
         return self.guarded(lambda: command.main(argv, prog_name=self.prog, standalone_mode=False, obj=self))
 
     def guarded(self, call: Callable[[], object]) -> int:
-        """Run ``call`` (a command, or a command's callback with its options given) behind this boundary."""
+        """Run ``call`` (a command, or a command's callback with its options given) behind this boundary;
+        a Ctrl-C that comes while an error is being reported ends it as interrupted, with no traceback."""
+        try:
+            return self._guarded(call)
+        except KeyboardInterrupt:
+            self._say("interrupted")
+            return EXIT_INTERRUPTED
+
+    def _guarded(self, call: Callable[[], object]) -> int:
         try:
             code = call()
         except (click.exceptions.Abort, KeyboardInterrupt):

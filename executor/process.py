@@ -17,7 +17,7 @@ import signal
 import subprocess
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, BinaryIO, Protocol
 
@@ -32,12 +32,48 @@ def disk_full(exc: BaseException) -> bool:
     return isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS
 
 
+class StartTicket:
+    """A start that a launcher may hold back while its slots are busy; :meth:`withdraw` gives it up.
+
+    The launcher says how to take its request back (:meth:`on_withdraw`) before the request goes
+    out, and that it went (:meth:`sent`: ``on_sent`` is called, e.g. to let the next job's request
+    go); a withdrawal that comes first is remembered, and the launcher then never sends the request.
+    """
+
+    def __init__(self, on_sent: Callable[[], None] | None = None) -> None:
+        self._lock = threading.Lock()
+        self._take_back: Callable[[], None] | None = None
+        self._on_sent = on_sent
+        self.withdrawn = False
+
+    def sent(self) -> None:
+        """The launcher has sent the request (it may still hold the start back)."""
+        if self._on_sent is not None:
+            self._on_sent()
+
+    def on_withdraw(self, take_back: Callable[[], None]) -> bool:
+        """Register how to take the request back; False when it was withdrawn already (do not send it)."""
+        with self._lock:
+            if self.withdrawn:
+                return False
+            self._take_back = take_back
+            return True
+
+    def withdraw(self) -> None:
+        with self._lock:
+            self.withdrawn = True
+            take_back, self._take_back = self._take_back, None
+        if take_back is not None:
+            take_back()
+
+
 class Launcher(Protocol):
     """Starts a command some other way than ``exec`` (the built-in runner forks it from a warm server)."""
 
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], output_fd: int,
-              stdout: BinaryIO | None = None) -> Any:
-        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``; a Popen-like object."""
+              stdout: BinaryIO | None = None, ticket: StartTicket | None = None) -> Any:
+        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``; a Popen-like object,
+        or None when ``ticket`` was withdrawn before the start (it may wait for a free slot)."""
 
 
 @dataclass(frozen=True)
@@ -129,7 +165,8 @@ class ChildProcess:
     def __init__(self, argv: Sequence[str], log_path: str | None, *, cwd: str | None = None,
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
                  marker: str | None = None, environment: Mapping[str, str] | None = None,
-                 append: bool = False, launcher: Launcher | None = None) -> None:
+                 append: bool = False, launcher: Launcher | None = None,
+                 on_sent: Callable[[], None] | None = None) -> None:
         self.argv = list(argv)
         self.log_path = log_path               # None: stdin, stdout and stderr are this process's
         self.append = append
@@ -138,6 +175,7 @@ class ChildProcess:
         self.grace = grace
         self.echo = echo
         self.launcher = launcher               # None: exec argv; else the launcher forks it (built-in runner)
+        self.on_sent = on_sent                 # told when the launcher has the request (see StartTicket)
         self.extra_env = dict(environment or {})
         if marker is not None:
             self.extra_env[JOB_ENV] = marker
@@ -149,6 +187,8 @@ class ChildProcess:
         self._log_error: OSError | None = None
         self._started_at = 0.0
         self._kill_at: float | None = None     # monotonic time of the SIGKILL a timeout or cancel arranged
+        self._ticket: StartTicket | None = None  # a launcher's start not begun yet (cancel withdraws it)
+        self._grace_asked: float | None = None   # the grace of a cancel that came while the start was held
 
     @property
     def pid(self) -> int | None:
@@ -157,17 +197,18 @@ class ChildProcess:
     def start(self) -> int | None:
         """Spawn the child (no shell, own process group); raises OSError when it cannot be started.
 
-        Returns its process id, or None without starting it when :meth:`cancel` came first.
+        Returns its process id, or None without starting it when :meth:`cancel` came first. A
+        launcher may hold the start back until one of its slots is free; the wait is not the child's
+        time (its start time and timeout count from the start), and a cancel meanwhile withdraws it.
         """
+        if self.launcher is not None and self.log_path is not None:
+            return self._start_launched()
         self._started_at = time.time()
         with self._lock:
             if self._cancelled:
                 return None
             if self.log_path is None:
                 self.proc = self._spawn(None, None)
-            elif self.launcher is not None:
-                with open(self.log_path, "ab" if self.append else "wb") as log:
-                    self.proc = self._fork(log)
             else:
                 with open(self.log_path, "ab" if self.append else "wb") as log:
                     self.proc = self._spawn(subprocess.DEVNULL,
@@ -183,21 +224,45 @@ class ChildProcess:
             env={**os.environ, **self.extra_env} if self.extra_env else None,  # (a fork inherits os.environ)
             start_new_session=True, close_fds=True)
 
-    def _fork(self, log):
+    def _start_launched(self) -> int | None:
+        """:meth:`start` through the launcher, which may hold it back: this lock is not held meanwhile."""
+        with self._lock:
+            if self._cancelled:
+                return None
+            ticket = self._ticket = StartTicket(self.on_sent)
+        with open(self.log_path, "ab" if self.append else "wb") as log:  # type: ignore[arg-type]
+            proc = self._fork(log, ticket)
+        self._started_at = time.time()
+        with self._lock:
+            self._ticket = None
+            if proc is None:                     # withdrawn by a cancel before it started
+                return None
+            self.proc = proc
+            if self.timeout is not None:
+                self._arm_locked(self.timeout, self._on_timeout)
+            if self._cancelled:                  # the cancel came too late to withdraw it: stop it now
+                self._cancel_locked(self.grace if self._grace_asked is None else self._grace_asked)
+            return proc.pid
+
+    def _fork(self, log, ticket: StartTicket):
         """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""
         assert self.launcher is not None
         if self.echo is None:
             return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
-                                       output_fd=log.fileno())
+                                       output_fd=log.fileno(), ticket=ticket)
         read_end, write_end = os.pipe()
+        stdout = os.fdopen(read_end, "rb")
         try:
-            return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
-                                       output_fd=write_end, stdout=os.fdopen(read_end, "rb"))
+            proc = self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
+                                       output_fd=write_end, stdout=stdout, ticket=ticket)
         except BaseException:
-            os.close(read_end)
+            stdout.close()
             raise
         finally:
             os.close(write_end)
+        if proc is None:
+            stdout.close()
+        return proc
 
     def wait(self) -> ProcessOutcome:
         """Block until the child exits (copying its output when echoing); end what is left of its group.
@@ -237,15 +302,26 @@ class ChildProcess:
         with self._lock:
             self._cancelled = True
             if self.proc is None:
+                ticket = self._ticket            # a start held back by the launcher: take it back
+                if self._grace_asked is None or grace < self._grace_asked:
+                    self._grace_asked = grace
+            else:
+                self._cancel_locked(grace)
                 return
-            if grace <= 0:
-                self._kill_at = time.monotonic()
-                kill_group(self.proc.pid)
-                return
-            if self.proc.returncode is not None:
-                return
-            kill_group(self.proc.pid, signal.SIGINT)
-            self._arm_kill_locked(grace)
+        if ticket is not None:
+            ticket.withdraw()
+
+    def _cancel_locked(self, grace: float) -> None:
+        """SIGINT to the child's group and SIGKILL after ``grace`` (at once when it is 0); holds the lock."""
+        assert self.proc is not None
+        if grace <= 0:
+            self._kill_at = time.monotonic()
+            kill_group(self.proc.pid)
+            return
+        if self.proc.returncode is not None:
+            return
+        kill_group(self.proc.pid, signal.SIGINT)
+        self._arm_kill_locked(grace)
 
     def _arm_locked(self, delay: float, action) -> None:
         timer = threading.Timer(delay, action)

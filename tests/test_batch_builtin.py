@@ -269,9 +269,36 @@ def test_ctrl_c_stops_builtin_jobs_and_resume_finishes(tmp_path):
     assert root.get("tests") == "6" and root.find(".//error[@type='cancelled']") is not None
     log = (tmp_path / "res/job0/log.txt").read_text()
     assert "aborted by SIGINT" in log                               # the job's own handler ran, as launched
+    # job2 and job3 were handed to the fork server ahead, waiting for a slot: withdrawn, never run,
+    # and their folders are gone again
+    assert records(tmp_path) == [] and sorted(p.name for p in (tmp_path / "res").iterdir() if p.is_dir()) == [
+        "job0", "job1"]
     resumed = run_cli(["-o", "res", "--resume", "-j", "2"], tmp_path, env, timeout=120)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert os.path.exists(tmp_path / "res/job5/test.xml")
+    assert sorted(row[0] for row in records(tmp_path)) == [f"c{i}" for i in range(6)]    # each once
+
+
+def test_jobs_start_in_the_order_they_were_claimed(tmp_path):
+    """Each job's thread hands its start to the fork server, ahead of a free slot; the threads race,
+    yet the jobs start in order (the server forks them in the order their requests come: pids rise)."""
+    names = [f"o{i:02}" for i in range(40)]
+    env = make_variants(tmp_path, names, pause=0.05)
+    done = run_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
+    assert done.returncode == 0, done.stdout + done.stderr
+    pid_of = {row[0]: int(row[1]) for row in records(tmp_path)}
+    pids = [pid_of[name] for name in names]
+    assert pids == sorted(pids), list(zip(names, pids, strict=True))
+
+
+def test_a_job_handed_over_ahead_is_timed_from_its_start(tmp_path):
+    """The fork server holds the next job until the slot is free; its timeout and time start then."""
+    env = make_variants(tmp_path, ["a", "b", "c"], pause=1.0)
+    done = run_cli(["-i", "out", "-o", "res", "-j", "1", "--timeout", "1.8"], tmp_path, env)
+    assert done.returncode == 0, done.stdout + done.stderr           # none waited into a timeout
+    assert sorted(row[0] for row in records(tmp_path)) == ["a", "b", "c"]
+    durations = [float(line.split()[-2]) for line in done.stdout.splitlines() if " passed " in line and "[" in line]
+    assert len(durations) == 3 and all(0.9 < t < 1.6 for t in durations), done.stdout   # not the wait
 
 
 # A module of the scenario's folder named like one the standard library has (and the entry-point lookup

@@ -31,7 +31,8 @@ import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
-from executor.batch.fork_server import command_target, receive, send
+from executor.batch.fork_protocol import command_target, receive, send
+from executor.process import StartTicket
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
 BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}")
@@ -92,6 +93,7 @@ class _Pending:
         self.event = threading.Event()
         self.pid: int | None = None
         self.reason: str | None = None
+        self.withdrawn = False
 
 
 class ForkServer:
@@ -99,13 +101,15 @@ class ForkServer:
 
     The server's probe runs write to a private folder this side makes and removes (``scratch``);
     ``on_scratch`` is told its path as soon as it exists (the worker's watchdog removes it should this
-    process be killed).
+    process be killed). ``limit``: jobs the server runs at once (0: no limit); a :meth:`spawn` beyond
+    that waits until the server starts it, the moment a running job ends.
     """
 
     def __init__(self, environment: Mapping[str, str] | None = None, *, keep_spare: bool = False,
-                 on_scratch: Callable[[str], None] | None = None) -> None:
+                 on_scratch: Callable[[str], None] | None = None, limit: int = 0) -> None:
         self.environment = dict(os.environ if environment is None else environment)
         self.keep_spare = keep_spare
+        self.limit = limit
         self.on_scratch = on_scratch
         self.scratch: str | None = None
         self.proc: subprocess.Popen | None = None
@@ -127,7 +131,7 @@ class ForkServer:
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         script_dir = os.path.dirname(sys.executable)
         code = ("import sys; sys.path[0] = sys.argv[1]; from executor.batch.fork_server import serve; "
-                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5] == 'spare')")
+                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5] == 'spare', int(sys.argv[6]))")
         try:
             target = command_target()
             self.scratch = tempfile.mkdtemp(prefix="scenario_fork_server_")
@@ -139,7 +143,8 @@ class ForkServer:
             self.on_scratch(self.scratch)
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, script_dir, str(theirs.fileno()), target,
-                                          self.scratch, "spare" if self.keep_spare else "no-spare"],
+                                          self.scratch, "spare" if self.keep_spare else "no-spare",
+                                          str(self.limit)],
                                          pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, env=self.environment,
                                          start_new_session=True, close_fds=True)
@@ -165,21 +170,32 @@ class ForkServer:
         return self
 
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
-              output_fd: int, stdout: BinaryIO | None = None) -> ForkedProcess:
-        """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``."""
+              output_fd: int, stdout: BinaryIO | None = None,
+              ticket: StartTicket | None = None) -> ForkedProcess | None:
+        """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``;
+        waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
         request_id = str(next(self._ids))
         pending = _Pending()
         with self._table_lock:
             self._pending[request_id] = pending
         with self._lock:
             if not self._alive or self._sock is None:
+                self._forget(request_id)
                 raise ForkServerError("the built-in runner's fork server has ended")
+            if ticket is not None and not ticket.on_withdraw(lambda: self._withdraw(request_id)):
+                self._forget(request_id)
+                return None
             try:
                 send(self._sock, {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)},
                      [output_fd])
             except OSError as exc:
+                self._forget(request_id)
                 raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+        if ticket is not None:
+            ticket.sent()
         pending.event.wait()
+        if pending.withdrawn:
+            return None
         if pending.pid is None:
             raise ForkServerError(f"the built-in runner could not start the job: {pending.reason}")
         process = ForkedProcess(pending.pid, stdout)
@@ -190,6 +206,20 @@ class ForkServer:
         if early is not None:
             process._exited(early)
         return process
+
+    def _forget(self, request_id: str) -> None:
+        with self._table_lock:
+            self._pending.pop(request_id, None)
+
+    def _withdraw(self, request_id: str) -> None:
+        """Ask the server to drop a request that still waits for a slot (it answers ``withdrawn``)."""
+        with self._lock:
+            if self._sock is None:
+                return
+            try:
+                send(self._sock, {"withdraw": request_id})
+            except OSError:
+                pass                 # the server is gone: the reader fails every pending request
 
     def _read(self) -> None:
         """Dispatch the server's replies; when it ends, end its jobs and fail what waits for it."""
@@ -220,12 +250,13 @@ class ForkServer:
 
     def _dispatch(self, message: dict) -> None:
         request_id, event = str(message.get("id")), message.get("event")
-        if event in ("started", "failed"):
+        if event in ("started", "failed", "withdrawn"):
             with self._table_lock:
                 pending = self._pending.pop(request_id, None)
             if pending is not None:
                 pending.pid = message.get("pid") if event == "started" else None
                 pending.reason = message.get("reason")
+                pending.withdrawn = event == "withdrawn"
                 pending.event.set()
         elif event == "exited":
             code = os.waitstatus_to_exitcode(message["status"])

@@ -12,18 +12,20 @@ import stat
 from pathlib import Path
 
 
-def prepare_job_folder(root: Path, folder: Path, real_root: str) -> None:
-    """Create a job's folder under the output root, refusing one that leads elsewhere (see the module doc).
+def prepare_job_folder(root: Path, folder: Path, real_root: str) -> bool:
+    """Create a job's folder under the output root, refusing one that leads elsewhere (see the module doc);
+    returns whether it made the folder (False: it was there).
 
     ``real_root``: the root's real path, resolved once per batch (:class:`JobFolders`). A folder right
     inside the root needs no path resolution: being a real directory (not a link) in the root, its
     real path is inside the root's.
     """
+    made = True
     if folder.parent == root and folder.name not in ("", ".", ".."):
         try:
             os.mkdir(folder)
         except FileExistsError:
-            pass
+            made = False
         except FileNotFoundError:         # the root went away meanwhile: make it again
             root.mkdir(parents=True, exist_ok=True)
             folder.mkdir(exist_ok=True)
@@ -32,13 +34,15 @@ def prepare_job_folder(root: Path, folder: Path, real_root: str) -> None:
             raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
         if not stat.S_ISDIR(mode):
             raise FileExistsError(f"the job folder {folder} exists and is not a folder")
-        return
+        return made
     if folder.is_symlink():
         raise OSError(f"the job folder {folder} is a symbolic link; refusing to write through it")
+    made = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     real = folder.resolve()
     if not real.is_relative_to(real_root):
         raise OSError(f"the job folder {folder} leads out of {root} (to {real}); refusing to write there")
+    return made
 
 
 class JobFolders:
@@ -47,11 +51,11 @@ class JobFolders:
     def __init__(self) -> None:
         self._real_roots: dict[str, str] = {}    # output root -> its real path
 
-    def prepare(self, root: Path, folder: Path) -> None:
+    def prepare(self, root: Path, folder: Path) -> bool:
         """:func:`prepare_job_folder`, the root made and its real path resolved on its first job."""
         key = str(root)
         real = self._real_roots.get(key)
         if real is None:
             root.mkdir(parents=True, exist_ok=True)
             real = self._real_roots[key] = os.path.realpath(root)
-        prepare_job_folder(root, folder, real)
+        return prepare_job_folder(root, folder, real)

@@ -60,27 +60,86 @@ def job_marker(job_id: int, attempt: int) -> str:
     return f"{job_id}.{attempt}"
 
 
-def rotate_log(output_dir: Path, attempt: int) -> None:
-    """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts.
+def rotate_log(output_dir: Path, attempt: int) -> Path | None:
+    """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts;
+    returns where it went (None: there was none).
 
     A log of an earlier batch in the same job folder (``--rerun-failed``, a new batch into the same
     ``-o``) is kept too, under the first free ``log.<n>.txt``: nothing written is lost.
     """
     log = output_dir / LOG_FILE
     if not log.exists():
-        return
+        return None
     number = max(attempt - 1, 1)
     while (output_dir / f"log.{number}.txt").exists():
         number += 1
-    log.replace(output_dir / f"log.{number}.txt")
+    kept = output_dir / f"log.{number}.txt"
+    log.replace(kept)
+    return kept
+
+
+def undo_folder(output_dir: Path, kept_log: Path | None, made_folder: bool) -> None:
+    """An attempt that never started leaves its folder as it found it: its empty log removed, the
+    previous log back in place, the folder removed when this attempt made it and it is empty."""
+    log = output_dir / LOG_FILE
+    try:
+        if log.exists() and log.stat().st_size == 0:
+            log.unlink()
+        if kept_log is not None and not log.exists():
+            kept_log.replace(log)
+        if made_folder:
+            output_dir.rmdir()
+    except OSError:
+        pass                                     # not empty (someone wrote there): leave it
+
+
+class StartOrder:
+    """Lets jobs hand their start over in the order they were claimed.
+
+    Each job runs in its own thread, and those threads race: without this, a job claimed later could
+    reach the fork server first and take the free slot (the first job would wait for the next one).
+    A job takes a number when it is claimed (:meth:`take`), waits for its turn before it starts
+    (:meth:`wait`), and passes the turn on (:meth:`done`) once its request is out, or when it ends
+    without one; a number passed on twice, or out of turn, counts once.
+    """
+
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._issued = 0
+        self._next = 0                  # the number whose turn it is
+        self._finished: set[int] = set()  # later numbers already done
+
+    def take(self) -> int:
+        with self._changed:
+            number, self._issued = self._issued, self._issued + 1
+            return number
+
+    def wait(self, number: int) -> None:
+        with self._changed:
+            self._changed.wait_for(lambda: self._next >= number)
+
+    def done(self, number: int) -> None:
+        with self._changed:
+            if number < self._next:
+                return
+            self._finished.add(number)
+            while self._next in self._finished:
+                self._finished.discard(self._next)
+                self._next += 1
+            self._changed.notify_all()
 
 
 class JobRun:
-    """Run one claimed job in a thread; ``cancel`` stops it (from the worker loop's thread)."""
+    """Run one claimed job in a thread; ``cancel`` stops it (from the worker loop's thread).
+
+    ``order``: the worker's :class:`StartOrder` and this job's number in it (its start is handed over
+    in claim order); without it the job starts as soon as its thread is ready.
+    """
 
     def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
                  events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None,
-                 environment: Mapping[str, str] | None = None, launcher: Launcher | None = None) -> None:
+                 environment: Mapping[str, str] | None = None, launcher: Launcher | None = None,
+                 made_folder: bool = False, order: tuple[StartOrder, int] | None = None) -> None:
         self.job = job
         self.batch = batch
         self.output_dir = output_dir
@@ -90,6 +149,8 @@ class JobRun:
         self.echo = echo
         self.environment = dict(environment or {})   # for the job's and its hooks' processes (the runner's mark)
         self.launcher = launcher                     # the built-in runner's fork server, for batches without a command
+        self.made_folder = made_folder               # the worker made the job's folder for this attempt
+        self.order = order
         self.lost = False                     # set when the lease was taken over: the result is dropped
         self._child: ChildProcess | None = None    # the job's child, then each post-run hook's in turn
         self._lock = threading.Lock()
@@ -123,11 +184,19 @@ class JobRun:
         if child is not None and grace is not None:
             child.cancel(grace)
 
+    def pass_turn(self) -> None:
+        """Let the job claimed after this one hand its start over (its own is out, or never will be)."""
+        if self.order is not None:
+            self.order[0].done(self.order[1])
+
     def _main(self) -> None:
         started = time.time()
         problems: list[str] = []
         try:
-            result = self._attempt(problems)
+            try:
+                result = self._attempt(problems)
+            finally:
+                self.pass_turn()              # an attempt that failed before its start passes it on
         except OSError as exc:
             result = disk_full_result(self.output_dir, started, time.time()) if disk_full(exc) else launch_failure(
                 self.output_dir, started, time.time(), f"cannot start the launch command: {exc.strerror or exc}")
@@ -137,8 +206,9 @@ class JobRun:
 
     def _attempt(self, problems: list[str]) -> JobResult:
         options = self.batch.options
+        made_folder = self.made_folder or not self.output_dir.is_dir()
         self.output_dir.mkdir(parents=True, exist_ok=True)
-        rotate_log(self.output_dir, self.job.attempts)
+        kept_log = rotate_log(self.output_dir, self.job.attempts)
         mark = FileMark.of(self.output_dir / RESULT_FILE)
         coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
         if not self.batch.command and self.launcher is None:
@@ -148,16 +218,25 @@ class JobRun:
         child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
                              grace=options.grace, echo=self.echo, environment=self.environment,
                              marker=job_marker(self.job.id, self.job.attempts),
-                             launcher=None if self.batch.command else self.launcher)
+                             launcher=None if self.batch.command else self.launcher, on_sent=self.pass_turn)
+        if self.order is not None:
+            self.order[0].wait(self.order[1])
         with self._lock:
-            if self._cancel_grace is not None:
-                now = time.time()
-                return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
-                                 output_dir=str(self.output_dir))
-            pid = child.start()
-            self._child = child
-        if pid is not None:                   # None: cancelled before it started (wait() says so)
-            self.events.put(Started(self, pid))
+            cancelled = self._cancel_grace is not None
+            if not cancelled:
+                self._child = child               # from now on a cancel reaches it, started or not yet
+        # the built-in runner may hold the start back until a slot is free: not under the lock, so
+        # that a cancel meanwhile takes it back (start() then returns None)
+        try:
+            pid = None if cancelled else child.start()
+        finally:
+            self.pass_turn()                      # (when the launcher had it, the turn passed already)
+        if pid is None:                           # cancelled before it started: the folder as it was
+            undo_folder(self.output_dir, kept_log, made_folder)
+            now = time.time()
+            return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
+                             output_dir=str(self.output_dir))
+        self.events.put(Started(self, pid))
         outcome = child.wait()
         if options.post_run and not outcome.cancelled:
             problems.extend(run_post_hooks(options.post_run, self.output_dir, log_path=self.output_dir / HOOK_LOG,

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, BinaryIO
 
 from executor.batch.builtin_runner import ForkServer, ForkServerError, spare_cores
 from executor.batch.job_folders import JobFolders
-from executor.batch.job_run import Done, JobRun, Started, job_marker
+from executor.batch.job_run import Done, JobRun, Started, StartOrder, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
@@ -120,6 +120,9 @@ class Worker:
         self._unsure_claims = False
         self._fork_server: ForkServer | None = None
         self._watchdog: Watchdog | None = None        # set while run() runs
+        self._ahead: int | None = None                # jobs held ready beyond the slots (see _capacity)
+        self._shown_running: set[int] = set()         # jobs the display counts as running
+        self._start_order = StartOrder()              # jobs hand their starts over in claim order
         self._folders = JobFolders()
         self._started_due: float | None = None   # when the oldest held start record is to be written
 
@@ -169,7 +172,7 @@ class Worker:
                 self._fork_server.close()
                 self._fork_server = None
             self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id},
-                                           keep_spare=spare_cores(self.settings.slots),
+                                           keep_spare=spare_cores(self.settings.slots), limit=self.settings.slots,
                                            on_scratch=self._watchdog.remove_on_death if self._watchdog else None,
                                            ).start()
         return self._fork_server
@@ -226,8 +229,25 @@ class Worker:
             self._warned_unavailable = False
         return True if value is None else value
 
+    def _capacity(self) -> int:
+        """How many jobs this worker holds at once: its slots, and in a batch of the built-in runner as
+        many again, handed to the fork server ahead: it holds each until a slot is free and starts it
+        the moment a job ends, so no slot waits while this loop records a result and claims the next
+        job (measured, 1,000 trivial jobs at -j 2: 1.36 slots busy on average without). Launched
+        commands, a ``worker`` that takes jobs of any batch, and ``--halt-on-failure`` (a job handed
+        ahead would start before the failure is known) hold no more than their slots."""
+        if self._ahead is None:
+            batch_id = self.settings.batch_id
+            if batch_id is None:
+                self._ahead = 0
+            else:
+                batch = self._batch(batch_id)
+                ahead = not batch.command and not batch.options.halt_on_failure
+                self._ahead = self.settings.slots if ahead else 0
+        return self.settings.slots + self._ahead
+
     def _may_claim(self, now: float) -> bool:
-        free = self.settings.slots - len(self._runs)
+        free = self.settings.slots + (self._ahead or 0) - len(self._runs)
         if self._stop.is_set() or free <= 0 or now < self._retry_at:
             return False
         if self.settings.batch_id is not None and self.settings.batch_id in self._halted:
@@ -235,7 +255,7 @@ class Worker:
         return self._claim_more or now >= self._next_claim
 
     def _claim(self) -> None:
-        free = self.settings.slots - len(self._runs)
+        free = self._capacity() - len(self._runs)
         try:
             jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
                                     shared_only=self.settings.batch_id is None, lease=self.settings.lease)
@@ -276,8 +296,9 @@ class Worker:
         began = time.time()
         problem: str | None = None
         full_disk = False                   # the problem is a full disk: the job is stopped, not judged
+        made_folder = False
         try:
-            self._folders.prepare(root, output_dir)
+            made_folder = self._folders.prepare(root, output_dir)
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
@@ -295,16 +316,17 @@ class Worker:
                 problem = str(exc)
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
                      echo=self.settings.echo if self.settings.slots == 1 else None,
-                     environment={RUNNER_ENV: self.identity.id}, launcher=launcher)
+                     environment={RUNNER_ENV: self.identity.id}, launcher=launcher, made_folder=made_folder,
+                     order=(self._start_order, self._start_order.take()))
         self._runs[job.id] = run
         self._started += 1
-        self.reporter.job_started(job)
         if problem is None:
             try:
                 run.start()
                 return
             except RuntimeError as exc:           # no thread could be started
                 problem = f"cannot start the job: {exc}"
+        run.pass_turn()                           # it never starts: the next job need not wait for it
         ended = time.time()
         self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
                               else launch_failure(output_dir, began, ended, problem)))
@@ -362,18 +384,20 @@ class Worker:
         return counts[JobState.QUEUED] + counts[JobState.RUNNING]
 
     def _cancel_all(self) -> None:
+        # newest first: the jobs handed to the fork server ahead are withdrawn before the running
+        # ones are stopped, so none of them starts in the slot a stopped job leaves
         if self._force.is_set():
-            for run in self._runs.values():
+            for run in reversed(list(self._runs.values())):
                 run.cancel(grace=0)
         elif not self._cancelling:
             self._cancelling = True
-            for run in self._runs.values():
+            for run in reversed(list(self._runs.values())):
                 run.cancel()
 
     # ------------------------------------------------------------------ events and writes
     def _wait_for_event(self) -> None:
         timeout = _TICK
-        if self._claim_more and not self._stop.is_set() and len(self._runs) < self.settings.slots \
+        if self._claim_more and not self._stop.is_set() and len(self._runs) < self.settings.slots + (self._ahead or 0) \
                 and time.monotonic() >= self._retry_at:
             timeout = 0.0
         if self._started_due is not None:         # wake when a held start record is due (and may be written)
@@ -391,7 +415,13 @@ class Worker:
                 break
 
     def _add(self, event: Started | Done) -> None:
-        """Queue a store write; a job's result makes the not yet written record of its start pointless."""
+        """Queue a store write; a job's result makes the not yet written record of its start pointless.
+
+        The display counts a job as running from its start (a job handed to the fork server ahead
+        waits for a slot), or from its result when it never started."""
+        if isinstance(event, Started) or event.run.job.id not in self._shown_running:
+            self._shown_running.add(event.run.job.id)
+            self.reporter.job_started(event.run.job)
         if isinstance(event, Done) and any(isinstance(e, Started) and e.run is event.run for e in self._pending):
             self._pending = deque(e for e in self._pending if not (isinstance(e, Started) and e.run is event.run))
         self._pending.append(event)
@@ -455,6 +485,7 @@ class Worker:
             self._runs.pop(job.id, None)
             return
         self._runs.pop(job.id, None)           # the slot frees only once the result is in the store
+        self._shown_running.discard(job.id)
         self.reporter.job_finished(job, result, retrying=retrying)
 
     def _record_coverage(self, job: Job, result: JobResult) -> None:

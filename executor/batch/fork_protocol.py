@@ -1,0 +1,58 @@
+"""The messages between the built-in runner and its fork server, and what the server is to run.
+
+One JSON message per ``sendmsg`` on a Unix socket pair (``SOCK_SEQPACKET``), file descriptors
+attached where a request carries the job's output (see :mod:`executor.batch.fork_server` for the
+conversation). Standard library only: the server imports this before anything else.
+"""
+
+from __future__ import annotations
+
+import array
+import json
+import os
+import socket
+
+#: Largest request or reply, in bytes.
+MAX_MESSAGE = 64 * 1024
+
+#: What the runner asks the server to run: the console script of the command (name, group).
+ENTRY_POINT = ("scenario_execution", "console_scripts")
+
+
+def command_target() -> str:
+    """Where the console script ``scenario_execution`` points (``module:function``), looked up in the
+    runner: the lookup (``importlib.metadata``) imports ``email``, ``zipfile``, ``csv``, ``calendar`` and
+    more, which a launched ``scenario_execution`` never loads. Had the server loaded them, a job's
+    own ``calendar.py`` beside its scenario would lose to the server's copy and the job differ from
+    the launched command."""
+    from importlib.metadata import entry_points
+
+    name, group = ENTRY_POINT
+    found = [ep for ep in entry_points(group=group) if ep.name == name]
+    if not found:
+        raise RuntimeError(f"the console script {name!r} is not installed")
+    return found[0].value
+
+
+def send(sock: socket.socket, message: dict, fds: list[int] | None = None) -> None:
+    """One JSON message, with file descriptors attached when given."""
+    data = json.dumps(message).encode()
+    if fds:
+        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, array.array("i", fds))])
+    else:
+        sock.sendall(data)
+
+
+def receive(sock: socket.socket, max_fds: int = 0) -> tuple[dict | None, list[int]]:
+    """The next message (None when the other end closed) and the descriptors that came with it."""
+    fds = array.array("i")
+    data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, socket.CMSG_SPACE(max_fds * fds.itemsize)
+                                                  if max_fds else 0)
+    for level, kind, payload in ancillary:
+        if level == socket.SOL_SOCKET and kind == socket.SCM_RIGHTS:
+            fds.frombytes(payload[:len(payload) - len(payload) % fds.itemsize])
+    if not data:
+        for fd in fds:
+            os.close(fd)
+        return None, []
+    return json.loads(data), list(fds)

@@ -311,16 +311,26 @@ class ChildProcess:
         if ticket is not None:
             ticket.withdraw()
 
+    def _signal_locked(self, sig: int) -> None:
+        """``sig`` to the child's group; to the child itself when it has no group yet (a job forked an
+        instant ago has not made its own session: the signal waits, blocked, until it has)."""
+        assert self.proc is not None
+        if not kill_group(self.proc.pid, sig) and self.launcher is not None and self.proc.returncode is None:
+            try:
+                os.kill(self.proc.pid, sig)
+            except OSError:
+                pass
+
     def _cancel_locked(self, grace: float) -> None:
         """SIGINT to the child's group and SIGKILL after ``grace`` (at once when it is 0); holds the lock."""
         assert self.proc is not None
         if grace <= 0:
             self._kill_at = time.monotonic()
-            kill_group(self.proc.pid)
+            self._signal_locked(signal.SIGKILL)
             return
         if self.proc.returncode is not None:
             return
-        kill_group(self.proc.pid, signal.SIGINT)
+        self._signal_locked(signal.SIGINT)
         self._arm_kill_locked(grace)
 
     def _arm_locked(self, delay: float, action) -> None:
@@ -341,13 +351,13 @@ class ChildProcess:
             if self.proc is None or self.proc.returncode is not None:
                 return
             self._timed_out = True
-            kill_group(self.proc.pid, signal.SIGTERM)
+            self._signal_locked(signal.SIGTERM)
             self._arm_kill_locked(self.grace)
 
     def _on_grace_over(self) -> None:
         with self._lock:
             if self.proc is not None:
-                kill_group(self.proc.pid)
+                self._signal_locked(signal.SIGKILL)
 
     def _copy(self) -> None:
         assert self.proc is not None and self.proc.stdout is not None and self.echo is not None

@@ -291,6 +291,39 @@ def test_jobs_start_in_the_order_they_were_claimed(tmp_path):
     assert pids == sorted(pids), list(zip(names, pids, strict=True))
 
 
+def _most_running(store: Path, process: subprocess.Popen) -> int:
+    """The most jobs the store showed ``running`` at once while ``process`` ran (sampled)."""
+    most = 0
+    while process.poll() is None:
+        try:                                       # read-only: the runner makes the store
+            with sqlite3.connect(f"file:{store}?mode=ro", uri=True) as conn:
+                running = conn.execute("SELECT COUNT(*) FROM jobs WHERE status = 'running'").fetchone()[0]
+            most = max(most, running)
+        except sqlite3.OperationalError:           # not made yet, or busy
+            pass
+        time.sleep(0.01)
+    return most
+
+
+def test_only_the_single_host_run_holds_jobs_ahead(tmp_path):
+    """The single-host run claims its slots and as many again (handed to the fork server ahead); a
+    ``worker``, even of one batch, claims no more than its slots, leaving the rest to other hosts; nor
+    does a run with ``--post-run`` hooks."""
+    env = make_variants(tmp_path, [f"h{i}" for i in range(8)], pause=0.2)
+    store = tmp_path / "queue.db"
+    local = start_cli(["-i", "out", "-o", "one", "-j", "1", "--store", f"sqlite:///{store}"], tmp_path, env)
+    assert _most_running(store, local) == 2 and local.returncode == 0
+    enqueued = run_cli(["-i", "out", "-o", "two", "--store", f"sqlite:///{store}", "--enqueue-only"], tmp_path, env)
+    assert enqueued.returncode == 0, enqueued.stdout + enqueued.stderr
+    worker = start_cli(["worker", "--store", f"sqlite:///{store}", "--batch", "2", "-j", "1", "--poll", "0.1"],
+                       tmp_path, env)
+    assert _most_running(store, worker) == 1 and worker.returncode == 0
+    hooked = start_cli(["-i", "out", "-o", "three", "-j", "1", "--store", f"sqlite:///{store}",
+                        "--post-run", f"{sys.executable} -c pass"], tmp_path, env)   # the next job waits for hooks
+    assert _most_running(store, hooked) == 1 and hooked.returncode == 0
+    assert len(records(tmp_path)) == 24
+
+
 def test_a_job_handed_over_ahead_is_timed_from_its_start(tmp_path):
     """The fork server holds the next job until the slot is free; its timeout and time start then."""
     env = make_variants(tmp_path, ["a", "b", "c"], pause=1.0)

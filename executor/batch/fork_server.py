@@ -424,7 +424,8 @@ class _Server:
         self.spare = _Spare(pid, mine)
 
     def close_in_child(self) -> None:
-        """What a job must not keep of the server: its socket, wake-up pipe and the spare's socket."""
+        """What a job must not keep of the server: its socket, wake-up pipe, the spare's socket and the
+        output files of the requests still waiting (another job's log held open)."""
         if self.sock.fileno() < 0:
             return                              # a spare closed them when it was forked
         self.sock.close()
@@ -432,6 +433,9 @@ class _Server:
         os.close(self.wake_write)
         if self.spare is not None:
             self.spare.sock.close()
+        for _request, fd in self.waiting.values():
+            os.close(fd)
+        self.waiting.clear()
 
     def _reap(self) -> None:
         while self.children:

@@ -232,7 +232,8 @@ class JobRun:
         finally:
             self.pass_turn()                      # (when the launcher had it, the turn passed already)
         if pid is None:                           # cancelled before it started: the folder as it was
-            undo_folder(self.output_dir, kept_log, made_folder)
+            if not self.lost:                     # (a lost job's folder may be its next attempt's already)
+                undo_folder(self.output_dir, kept_log, made_folder)
             now = time.time()
             return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
                              output_dir=str(self.output_dir))

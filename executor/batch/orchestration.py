@@ -233,7 +233,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     total = sum(counts.values())
     done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
     settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
-                              echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd())
+                              echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd(), hand_over_ahead=True)
     summary, signum = run_worker(store, settings, reporter, total, done)
     interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
     if summary.disk_full is not None and interrupted is None:

@@ -61,6 +61,7 @@ class WorkerSettings:
     echo: BinaryIO | None = None         # copy the children's output here (``-j 1``)
     cwd: str | None = None
     watchdog: bool = True                # every process this worker starts dies with it, even after kill -9
+    hand_over_ahead: bool = False        # the single-host run: built-in jobs go to the fork server ahead
 
 
 @dataclass
@@ -234,15 +235,18 @@ class Worker:
         many again, handed to the fork server ahead: it holds each until a slot is free and starts it
         the moment a job ends, so no slot waits while this loop records a result and claims the next
         job (measured, 1,000 trivial jobs at -j 2: 1.36 slots busy on average without). Launched
-        commands, a ``worker`` that takes jobs of any batch, and ``--halt-on-failure`` (a job handed
-        ahead would start before the failure is known) hold no more than their slots."""
+        commands, a ``worker`` (jobs it holds ahead would wait behind its busy slots while other hosts
+        idle), ``--halt-on-failure`` (a job handed ahead would start before the failure is known) and
+        ``--post-run`` (the next job would start while the last one's hooks still run) hold no more
+        than their slots."""
         if self._ahead is None:
             batch_id = self.settings.batch_id
-            if batch_id is None:
+            if batch_id is None or not self.settings.hand_over_ahead:
                 self._ahead = 0
             else:
                 batch = self._batch(batch_id)
-                ahead = not batch.command and not batch.options.halt_on_failure
+                options = batch.options
+                ahead = not batch.command and not options.halt_on_failure and not options.post_run
                 self._ahead = self.settings.slots if ahead else 0
         return self.settings.slots + self._ahead
 

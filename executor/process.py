@@ -110,6 +110,23 @@ def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
         return False
 
 
+def process_alive(pid: int | None) -> bool:
+    """Whether a process with this id exists on this host and is not a zombie."""
+    if not pid:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as handle:
+            return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):
+        return True
+
+
 def group_alive(pgid: int) -> bool:
     """Whether any process of group ``pgid`` is left (zombies count until reaped)."""
     try:

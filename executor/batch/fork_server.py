@@ -49,7 +49,8 @@ from executor.batch.fork_protocol import ENTRY_POINT, receive, send
 
 class Command:
     """The ``scenario_execution`` console script, imported from where it points (``target``, as
-    :func:`~executor.batch.fork_protocol.command_target` found it; this package never imports the command layer): its ``main``,
+    :func:`~executor.batch.fork_protocol.command_target` found it; this package never imports the
+    command layer): its ``main``,
     the path of its script, and its ``run_job(scenario, output_dir)`` when the command offers one
     (the same run without parsing the command line in every job)."""
 
@@ -353,24 +354,21 @@ class _Server:
                 pass
 
     def _request(self, request: dict, fds: list[int]) -> None:
-        """A spawn request: start it, or let it wait while ``limit`` jobs run."""
+        """A spawn request: it waits its turn behind earlier ones, and starts at once when a slot is free."""
         if len(fds) != 1:
             for fd in fds:
                 os.close(fd)
             send(self.sock, {"id": request.get("id"), "event": "failed", "reason": "no output descriptor"})
             return
-        if self.waiting or (self.limit and len(self.children) >= self.limit):
-            self.waiting[str(request.get("id"))] = (request, fds[0])
-            self._start_waiting()
-            return
-        self._spawn(request, fds)
+        self.waiting[str(request.get("id"))] = (request, fds[0])
+        self._start_waiting()
 
     def _start_waiting(self) -> None:
         """Start waiting requests, oldest first, while fewer than ``limit`` jobs run."""
         while self.waiting and not (self.limit and len(self.children) >= self.limit):
             request_id = next(iter(self.waiting))
             request, fd = self.waiting.pop(request_id)
-            self._spawn(request, [fd])
+            self._spawn(request, fd)
 
     def _withdraw(self, request_id: str) -> None:
         waiting = self.waiting.pop(request_id, None)
@@ -378,18 +376,18 @@ class _Server:
             os.close(waiting[1])
             send(self.sock, {"id": request_id, "event": "withdrawn"})
 
-    def _spawn(self, request: dict, fds: list[int]) -> None:
-        pid = self._hand_to_spare(request, fds[0])
+    def _spawn(self, request: dict, output_fd: int) -> None:
+        pid = self._hand_to_spare(request, output_fd)
         if pid is None:
             try:
                 pid = os.fork()
             except OSError as exc:
-                os.close(fds[0])
+                os.close(output_fd)
                 send(self.sock, {"id": request["id"], "event": "failed", "reason": f"fork: {exc.strerror}"})
                 return
             if pid == 0:
-                _run_child(request, fds[0], self)
-        os.close(fds[0])
+                _run_child(request, output_fd, self)
+        os.close(output_fd)
         self.children[pid] = request["id"]
         send(self.sock, {"id": request["id"], "event": "started", "pid": pid})
         if self.keep_spare and self.spare is None:
@@ -457,7 +455,7 @@ class _Server:
 
 def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: int = 0) -> None:
     """Entry of the server process: ``fd`` is its end of the socket pair; ``target`` the command's
-    ``module:function`` (:func:`command_target`); ``scratch`` a private folder of the runner's for the
+    ``module:function`` (:func:`~executor.batch.fork_protocol.command_target`); ``scratch`` a private folder of the runner's for the
     probe runs (the runner removes it, or its watchdog after a ``kill -9``); ``keep_spare``: keep a warm
     spare child (the runner has a core to spare); ``limit``: jobs at once, more requests wait."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):

@@ -206,7 +206,6 @@ class JobRun:
 
     def _attempt(self, problems: list[str]) -> JobResult:
         options = self.batch.options
-        made_folder = self.made_folder or not self.output_dir.is_dir()
         self.output_dir.mkdir(parents=True, exist_ok=True)
         kept_log = rotate_log(self.output_dir, self.job.attempts)
         mark = FileMark.of(self.output_dir / RESULT_FILE)
@@ -233,7 +232,7 @@ class JobRun:
             self.pass_turn()                      # (when the launcher had it, the turn passed already)
         if pid is None:                           # cancelled before it started: the folder as it was
             if not self.lost:                     # (a lost job's folder may be its next attempt's already)
-                undo_folder(self.output_dir, kept_log, made_folder)
+                undo_folder(self.output_dir, kept_log, self.made_folder)
             now = time.time()
             return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
                              output_dir=str(self.output_dir))

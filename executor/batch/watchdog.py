@@ -8,8 +8,9 @@ which inherit it. The watchdog blocks on the pipe. When the runner ends normally
 first and the watchdog just leaves; when the pipe closes without it, the runner died, and the
 watchdog kills (SIGKILL) the process group of every process that carries the mark, repeating until
 none is left, then removes the private folders the runner named on the pipe (``remove <path>``
-lines: the fork server's scratch folder), which no one else would remove. Detection is immediate (the kernel closes the pipe), and a job costs nothing extra:
-no ``preexec_fn``, so launched commands keep the fast ``vfork`` path.
+lines: the fork server's scratch folder), which no one else would remove. Detection is immediate
+(the kernel closes the pipe), and a job costs nothing extra: no ``preexec_fn``, so launched
+commands keep the fast ``vfork`` path.
 
 Chosen over ``PR_SET_PDEATHSIG`` in each child (measured 4-6 ms per job for the full ``fork`` it
 forces, and it reaches only the direct child, not its group) and over a pipe each child must watch

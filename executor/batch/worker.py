@@ -26,7 +26,7 @@ from executor.batch.job_run import Done, JobRun, Started, StartOrder, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
-from executor.process import RUNNER_ENV, disk_full, end_orphan_group
+from executor.process import RUNNER_ENV, disk_full, end_orphan_group, process_alive
 from store.database import StoreError
 from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
@@ -73,23 +73,6 @@ class WorkerSummary:
     nothing_to_do: bool = False
     #: The output folder whose disk filled up (the worker stopped there), else None.
     disk_full: str | None = None
-
-
-def process_alive(pid: int | None) -> bool:
-    """Whether a process with this id exists on this host and is not a zombie."""
-    if not pid:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as handle:
-            return handle.read().rsplit(b")", 1)[1].split()[0] != b"Z"
-    except (OSError, IndexError):
-        return True
 
 
 class Worker:
@@ -141,7 +124,7 @@ class Worker:
         jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone). Should
         this process die (``kill -9``), its watchdog ends every process it started.
         """
-        watchdog = self._watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
+        self._watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
         gc.collect()
         gc.freeze()      # what exists now (imports, the batch) is not scanned while the loop runs
         try:
@@ -157,8 +140,8 @@ class Worker:
             if self._fork_server is not None:
                 self._fork_server.close()
                 self._fork_server = None
-            if watchdog is not None:
-                watchdog.release()
+            if self._watchdog is not None:
+                self._watchdog.release()
                 self._watchdog = None
 
     @property
@@ -248,10 +231,14 @@ class Worker:
                 options = batch.options
                 ahead = not batch.command and not options.halt_on_failure and not options.post_run
                 self._ahead = self.settings.slots if ahead else 0
-        return self.settings.slots + self._ahead
+        return self._holding()
+
+    def _holding(self) -> int:
+        """The jobs this worker may hold now (its slots until the first claim has decided on more)."""
+        return self.settings.slots + (self._ahead or 0)
 
     def _may_claim(self, now: float) -> bool:
-        free = self.settings.slots + (self._ahead or 0) - len(self._runs)
+        free = self._holding() - len(self._runs)
         if self._stop.is_set() or free <= 0 or now < self._retry_at:
             return False
         if self.settings.batch_id is not None and self.settings.batch_id in self._halted:
@@ -401,7 +388,7 @@ class Worker:
     # ------------------------------------------------------------------ events and writes
     def _wait_for_event(self) -> None:
         timeout = _TICK
-        if self._claim_more and not self._stop.is_set() and len(self._runs) < self.settings.slots + (self._ahead or 0) \
+        if self._claim_more and not self._stop.is_set() and len(self._runs) < self._holding() \
                 and time.monotonic() >= self._retry_at:
             timeout = 0.0
         if self._started_due is not None:         # wake when a held start record is due (and may be written)

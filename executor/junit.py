@@ -93,22 +93,23 @@ PARSING = "Parsing of "
 
 
 def report_names(scenario_file: str, runs: Sequence[tuple[str, str]] = (),
-                 variant: tuple[str, str, Mapping[str, object]] | None = None) -> ReportNames:
+                 variant: tuple[str, str, Mapping[str, object], Mapping[str, str]] | None = None) -> ReportNames:
     """Names for the runs ``[(run name, scenario name)]`` of ``scenario_file``.
 
-    ``variant`` is ``(source file, scenario, assignment)`` when the file is a variant (a ``.sce``).
+    ``variant`` is ``(source file, scenario, assignment, units of the drawn parameters)`` when the file is a
+    variant (a ``.sce``).
     """
     stem = file_stem(scenario_file)
     if variant is None:
         cases = {run: (scenario_classname(stem, scenario), run) for run, scenario in runs}
         return ReportNames(suite=stem, classname=stem, name=stem, cases=cases)
-    source, own, assignment = variant
+    source, own, assignment, drawn = variant
     classname = scenario_classname(source, own)
-    name = variant_name(stem, assignment, own)
+    name = variant_name(stem, assignment, own, drawn)
     cases = {}
     for run, scenario in runs:
         if scenario == own:
-            cases[run] = (classname, variant_name(stem + run[len(scenario):], assignment, own))
+            cases[run] = (classname, variant_name(stem + run[len(scenario):], assignment, own, drawn))
         else:
             cases[run] = (scenario_classname(source, scenario), f"{stem}:{run}")
     return ReportNames(suite=stem, classname=classname, name=name, cases=cases)

@@ -21,6 +21,8 @@ import re
 from collections.abc import Mapping
 from pathlib import PurePath
 
+from coverage_engine.files.sce_domains import drawn_text, header_domains
+
 #: Longest testcase name written (CI pages cut long names; the stem at its start keeps it unique).
 MAX_NAME_CHARS = 120
 
@@ -51,11 +53,28 @@ def _value_text(value: object) -> str:
     return " ".join(text.split()) if any(c.isspace() and c != " " for c in text) else text
 
 
-def variant_name(stem: str, assignment: Mapping[str, object] | None, scenario: str | None = None) -> str:
-    """``stem[key=value,…]`` for a variant, at most :data:`MAX_NAME_CHARS` characters; ``stem`` without values."""
+def drawn_units(header: str) -> dict[str, str]:
+    """The unit of each parameter a sampler drew, from the ``# domain`` lines of a ``.sce`` header."""
+    return {d.key: d.unit for d in header_domains(header) if d.drawn}
+
+
+def _shown(key: str, value: object, drawn: Mapping[str, str]) -> str:
+    unit = drawn.get(key)
+    if unit is not None and isinstance(value, float) and math.isfinite(value):
+        return drawn_text(value, unit)      # 4 significant digits; the properties keep the exact value
+    return _value_text(value)
+
+
+def variant_name(stem: str, assignment: Mapping[str, object] | None, scenario: str | None = None,
+                 drawn: Mapping[str, str] | None = None) -> str:
+    """``stem[key=value,…]`` for a variant, at most :data:`MAX_NAME_CHARS` characters; ``stem`` without values.
+
+    ``drawn`` maps the parameters a sampler drew to their unit: those values are rounded (``speed=116.2kph``).
+    """
     if not assignment:
         return stem
-    inner = ",".join(f"{_short_key(str(k), scenario)}={_value_text(v)}" for k, v in assignment.items())
+    drawn = drawn or {}
+    inner = ",".join(f"{_short_key(str(k), scenario)}={_shown(str(k), v, drawn)}" for k, v in assignment.items())
     name = f"{stem}[{inner}]"
     if len(name) <= MAX_NAME_CHARS:
         return name

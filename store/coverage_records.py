@@ -39,6 +39,7 @@ from sqlalchemy import (
     Table,
     Text,
     delete,
+    func,
     insert,
     inspect,
     null,
@@ -237,6 +238,21 @@ class CoverageRecords:
             return None
         declarations = json.loads(self.declarations([row[0]])[row[0]])
         return join_document(declarations, json.loads(row[1]), json.loads(row[2]), format_name, format_version)
+
+    def variant_headers(self, batch_id: int, chars: int = 65536) -> list[str]:
+        """The start of one ``.sce`` text per variation run whose variants the batch ran (their headers
+        say what each variation declared); [] for a store without variation records."""
+        try:
+            if not inspect(self.engine).has_table(variants.name):
+                return []
+            ran = select(jobs.c.scenario_path).where(jobs.c.batch_id == batch_id)
+            firsts = (select(func.min(variants.c.id)).where(variants.c.file_path.in_(ran))
+                      .group_by(variants.c.run_id))
+            stmt = select(func.substr(variants.c.sce_text, 1, chars)).where(variants.c.id.in_(firsts))
+            with self.engine.connect() as conn:
+                return [row[0] for row in conn.execute(stmt) if row[0]]
+        except SQLAlchemyError as exc:
+            raise StoreError(f"cannot read the variants of batch {batch_id} from {self.url}: {exc}") from exc
 
     def iter_batch(self, batch_id: int, chunk: int = 5000) -> Iterator[StoredRun]:
         """Every job of a batch in file order, with its coverage row when there is one, read in chunks.

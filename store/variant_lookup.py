@@ -13,10 +13,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from sqlalchemy import Engine, MetaData, Table, inspect, select
+from sqlalchemy import Engine, MetaData, Table, func, inspect, literal, select
 from sqlalchemy.exc import SQLAlchemyError
 
 _CHUNK = 500
+
+#: How much of a variant's ``.sce`` text is read for its header.
+HEADER_CHARS = 4096
 
 
 @dataclass(frozen=True)
@@ -26,6 +29,8 @@ class VariantInfo:
     assignment: dict[str, object] = field(default_factory=dict)
     scenario: str | None = None
     source: str | None = None
+    #: The start of the ``.sce`` text (its header comments: how values are shown, what was declared).
+    header: str = ""
 
 
 def _candidates(path: str) -> set[str]:
@@ -56,6 +61,7 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
             return {}
         columns: list[Any] = [table.c.file_path, table.c.assignment]
         columns.append(table.c.scenario if "scenario" in table.c else table.c.file_path.label("no_scenario"))
+        head = func.substr(table.c.sce_text, 1, HEADER_CHARS) if "sce_text" in table.c else literal("")
         joined: Any = table
         if "source_id" in table.c and inspector.has_table("source_files"):
             sources = Table("source_files", metadata, autoload_with=engine)
@@ -66,7 +72,7 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
         with engine.connect() as conn:
             for start in range(0, len(names), _CHUNK):
                 chunk = names[start:start + _CHUNK]
-                stmt = select(*columns).select_from(joined).where(table.c.file_path.in_(chunk))
+                stmt = select(*columns, head.label("header")).select_from(joined).where(table.c.file_path.in_(chunk))
                 if "id" in table.c:
                     stmt = stmt.order_by(table.c.id)       # the newest row for a path wins
                 for row in conn.execute(stmt):
@@ -74,8 +80,8 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
                     if not isinstance(value, dict):
                         continue
                     scenario = row[2] if "scenario" in table.c else None
-                    source = row[3] if len(row) > 3 else None
-                    found[wanted[row[0]]] = VariantInfo(value, scenario, source)
+                    source = row[3] if len(row) > 4 else None
+                    found[wanted[row[0]]] = VariantInfo(value, scenario, source, row[-1] or "")
         return found
     except (SQLAlchemyError, ValueError):
         return {}

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from coverage_engine.coverage.buckets import InputValueBuckets, MemberBuckets, RangeBuckets
+from coverage_engine.coverage.buckets import MemberBuckets, RangeBuckets
+from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.errors import PlanError
 from coverage_engine.coverage.plan import parse_plan
 
@@ -43,7 +44,7 @@ def test_members_and_many_numeric_inputs():
     assert MemberBuckets(("left", "right")).keys(["right", "up"]) == ["right", None]
     values = list(range(100))
     defs, index = InputValueBuckets().finish(values)
-    assert len(defs) == 20 and defs[0].label == "[0..4.95)" and index[0] == 0 and index[99] == 19
+    assert len(defs) == 20 and defs[0].label == "[0..5)" and index[0] == 0 and index[99] == 19
     defs, index = InputValueBuckets().finish([30, 10, 20])
     assert [d.label for d in defs] == ["10", "20", "30"]
 

@@ -10,8 +10,8 @@ Four kinds of bucketing, chosen from an item's declaration:
 * **members** — ``enum`` and ``bool`` items: one bucket per member; every member is part of the goal.
 * **distinct** — numbers without a range and strings: one bucket per distinct value seen (at most
   :data:`DISTINCT_LIMIT`; later new values are ignored and the report says so). Varied parameters
-  (input coverage) use it too, and with more than :data:`INPUT_VALUES_LIMIT` numeric values they are
-  grouped into :data:`AUTO_BINS` equal-width buckets between the smallest and largest value.
+  (input coverage, :mod:`~coverage_engine.coverage.input_domains`) use its keys, bucketed by what the
+  variation declared.
 * **cross** — a tuple of component keys; the buckets are the product of the components' buckets.
 
 A *key* is what the merge counts under while runs stream in (a bucket index, a member name, a value,
@@ -35,10 +35,6 @@ MAX_BUCKETS = 10_000
 
 #: Most distinct values an item without a range gets buckets for.
 DISTINCT_LIMIT = 1_000
-
-#: A varied parameter with more numeric values than this is grouped into :data:`AUTO_BINS` buckets.
-INPUT_VALUES_LIMIT = 50
-AUTO_BINS = 20
 
 #: Up to this many whole numbers, an ``int`` range without ``every`` has one bucket per value.
 _INT_VALUES_PER_BUCKET_LIMIT = 20
@@ -190,23 +186,6 @@ class DistinctBuckets:
     def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
         ordered = _sort_values(list(keys))
         return [Bucket(value_label(k), value=k) for k in ordered], {k: i for i, k in enumerate(ordered)}
-
-
-class InputValueBuckets(DistinctBuckets):
-    """The values of a varied parameter; many numeric values are grouped into equal-width buckets."""
-
-    kind = "input"
-    limit = 100_000
-
-    def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
-        seen = list(keys)
-        numbers = _numbers(seen)
-        if numbers is None or len(numbers) <= INPUT_VALUES_LIMIT:
-            return super().finish(seen)
-        low, high = float(numbers[0]), float(numbers[-1])
-        ranges = RangeBuckets("float", low, high, (high - low) / AUTO_BINS)
-        index: dict[Hashable, int] = {k: ranges.index(k) for k in numbers}
-        return ranges.buckets(), index
 
 
 #: What a cross is made of: any bucketing but another cross.

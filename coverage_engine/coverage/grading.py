@@ -13,12 +13,15 @@ import math
 import re
 import statistics
 from array import array
-from collections.abc import Hashable
+from collections.abc import Hashable, Mapping
 from itertools import islice
 
-from coverage_engine.coverage.merge import CoverageMerger, ItemCounts
+from coverage_engine.coverage.buckets import value_label
+from coverage_engine.coverage.input_domains import InputValueBuckets
+from coverage_engine.coverage.merge import INPUT_PREFIX, CoverageMerger, ItemCounts
 from coverage_engine.coverage.model import (
     KIND_ORDER,
+    MAX_POINTS,
     BucketResult,
     CoverageReport,
     CrossGrid,
@@ -29,6 +32,7 @@ from coverage_engine.coverage.model import (
 )
 from coverage_engine.coverage.plan import CoveragePlan
 from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
+from coverage_engine.files.sce_domains import InputDomain, drawn_text
 
 #: Most cells a cross may have to be graded and drawn.
 MAX_CROSS_CELLS = 10_000
@@ -49,6 +53,7 @@ class _Buckets:
     """Builds :class:`BucketResult` records; failing runs are listed in natural order of their names."""
 
     def __init__(self, names: list[str], verdicts: list[str]) -> None:
+        self.names = names
         failing = [i for i, v in enumerate(verdicts) if v in ("failed", "error")]
         failing.sort(key=lambda i: natural_key(names[i]))
         self.rank = array("q", range(len(names)))    # runs that did not fail keep their own order
@@ -143,6 +148,43 @@ def _record(counts: ItemCounts) -> RecordSummary:
     return RecordSummary(count=sum(counts.others.values()), top_values=top)
 
 
+def _drawn(counts: ItemCounts) -> bool:
+    """Whether ``counts`` is a varied parameter a sampler drew from a continuous range."""
+    bucketing = counts.bucketing
+    return isinstance(bucketing, InputValueBuckets) and bucketing.domain is not None and bucketing.domain.drawn
+
+
+def _scatter(counts: ItemCounts, names: list[str]) -> tuple[tuple[float, float, str, str], ...]:
+    """The runs of a cross of two drawn ranges as points (each drawn pair is its own key)."""
+    points = []
+    for key, st in counts.stats.items():
+        x, y = _parts(key)
+        if not isinstance(x, (int, float)) or not isinstance(y, (int, float)):
+            continue
+        verdict = "failed" if st[2] else "error" if st[3] else "passed" if st[1] else "pending"
+        failing = counts.failing.get(key)
+        points.append((float(x), float(y), verdict, names[failing[0]] if failing else ""))
+    if len(points) > MAX_POINTS:
+        points = points[::math.ceil(len(points) / MAX_POINTS)]
+    return tuple(points)
+
+
+def apply_domains(merger: CoverageMerger, domains: Mapping[str, InputDomain]) -> None:
+    """Give each varied parameter what the variation declared for it, and the ``every`` of a ``cover()``
+    of the same parameter in the same unit (it then sets the width of the range's buckets)."""
+    covers = {c.decl.full_name: c.decl for c in merger.items.values() if c.kind == "cover" and c.decl is not None}
+    for counts in merger.items.values():
+        bucketing = counts.bucketing
+        if counts.kind != "input" or not isinstance(bucketing, InputValueBuckets):
+            continue
+        key = counts.name[len(INPUT_PREFIX):]
+        bucketing.domain = domain = domains.get(key)
+        decl = covers.get(key)
+        if domain is not None and domain.is_range and decl is not None and decl.every \
+                and (decl.unit or "") == domain.unit:
+            bucketing.every = decl.every
+
+
 def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
     settings = plan.for_item(counts.name)
     decl = counts.decl
@@ -151,10 +193,18 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
     record = None
     buckets: list[BucketResult] = []
     grade: float | None = None
+    points: tuple[tuple[float, float, str, str], ...] = ()
+    weight = settings.weight
     if counts.kind == "record":
         record = _record(counts)
     elif counts.kind in ("cross", "input_cross"):
         buckets, grid, notes = _cross_buckets(counts, settings.at_least, make)
+        if counts.kind == "input_cross" and all(_drawn(c) for c in counts.components):
+            points = _scatter(counts, make.names)
+            if not plan.names(counts.name):
+                weight = 0.0
+                notes.append("a cross of two sampled ranges: a scatter of the runs, not part of the overall "
+                             "grade (a plan that names it grades it)")
     else:
         buckets, _ = _plain_buckets(counts, settings.at_least, make)
     if counts.kind != "record" and (buckets or grid is None and not notes):
@@ -169,14 +219,14 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         notes.append("no sample")
     value_type = decl.value_type if decl is not None else None
     return ItemResult(
-        name=counts.name, kind=counts.kind, buckets=tuple(buckets), grade=grade, weight=settings.weight,
+        name=counts.name, kind=counts.kind, buckets=tuple(buckets), grade=grade, weight=weight,
         at_least=settings.at_least, path=decl.path if decl else "", unit=decl.unit if decl else None,
         type_text=value_type.describe() if value_type else None, text=decl.text if decl else None,
         event=decl.event if decl else None, ignore=decl.ignore if decl else None,
         range=decl.range if decl else None, every=counts.bucketing.every
         if getattr(counts.bucketing, "kind", "") == "range" else None,
         samples=counts.samples, runs_sampled=counts.runs_sampled, ignored=counts.ignored, cross=grid,
-        record=record, notes=tuple(notes))
+        record=record, notes=tuple(notes), points=points)
 
 
 def overall_grade(items: list[ItemResult]) -> float | None:
@@ -188,11 +238,26 @@ def overall_grade(items: list[ItemResult]) -> float | None:
     return sum(grade * weight for grade, weight in graded) / total
 
 
+def _values_text(values: Mapping[str, object], domains: Mapping[str, InputDomain]) -> str:
+    """A run's varied values on one line, keys without their scenario, drawn numbers rounded with their unit."""
+    parts = []
+    for key, value in values.items():
+        domain = domains.get(key)
+        if domain is not None and domain.drawn and isinstance(value, float):
+            shown = drawn_text(value, domain.unit)
+        else:
+            shown = value_label(value)
+        parts.append(f"{key.split('.', 1)[-1]}={shown}")
+    return ", ".join(parts)
+
+
 def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: str = "", complete: bool = True,
           notes: list[str] | None = None, root: str | None = None,
-          warnings: list[str] | None = None) -> CoverageReport:
-    """The report of everything ``merger`` has read."""
+          warnings: list[str] | None = None, domains: Mapping[str, InputDomain] | None = None) -> CoverageReport:
+    """The report of everything ``merger`` has read; ``domains``: what the variations declared."""
     plan = plan or CoveragePlan()
+    domains = domains or {}
+    apply_domains(merger, domains)
     order = {kind: i for i, kind in enumerate(KIND_ORDER)}
     counted = sorted(merger.items.values(), key=lambda c: order[c.kind])   # stable: first seen within a kind
     make = _Buckets(merger.run_names, merger.run_verdicts)
@@ -205,7 +270,8 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
         verdicts[verdict] = verdicts.get(verdict, 0) + 1
     runs = RunTable(names=tuple(merger.run_names), verdicts=tuple(merger.run_verdicts),
                     reasons=tuple(merger.run_reasons), folders=tuple(merger.run_folders),
-                    logs=tuple(merger.run_logs))
+                    logs=tuple(merger.run_logs),
+                    values={rid: _values_text(v, domains) for rid, v in merger.failing_values.items() if v})
     return CoverageReport(source=source, complete=complete, runs=runs, verdict_counts=verdicts,
                           items=tuple(items), grade=overall_grade(items), notes=tuple(notes or ()),
                           warnings=tuple(warnings), plan_file=plan.file, root=root)
@@ -224,4 +290,4 @@ def build_report(source: RunSource, plan: CoveragePlan | None = None) -> Coverag
         if collecting:
             gc.enable()
     return grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
-                 root=source.root, warnings=source.warnings)
+                 root=source.root, warnings=source.warnings, domains=source.domains)

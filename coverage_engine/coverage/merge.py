@@ -21,12 +21,8 @@ from collections import Counter, defaultdict
 from collections.abc import Hashable, Sequence
 from operator import itemgetter
 
-from coverage_engine.coverage.buckets import (
-    CrossBuckets,
-    DistinctBuckets,
-    InputValueBuckets,
-    bucketing_for,
-)
+from coverage_engine.coverage.buckets import CrossBuckets, DistinctBuckets, bucketing_for
+from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.coverage.runs import RunInput
 
@@ -55,6 +51,13 @@ def parse_assigned(text: str) -> object:
         except ValueError:
             pass
     return {"True": True, "False": False, "true": True, "false": False}.get(text, text)
+
+
+def _varied(run: RunInput) -> dict[str, object]:
+    """A run's varied values by parameter, however the run carries them."""
+    if run.parameters and run.values is not None and len(run.values) == len(run.parameters):
+        return dict(zip(run.parameters, run.values, strict=True))
+    return dict(run.assignment)
 
 
 def _ignored_key(key: Hashable) -> bool:
@@ -187,6 +190,8 @@ class CoverageMerger:
         self.run_folders: list[str | None] = []
         self.run_logs: list[str | None] = []
         self.items: dict[str, ItemCounts] = {}
+        #: The varied values of each run that failed or errored (by run id), for the failing-runs tables.
+        self.failing_values: dict[int, dict[str, object]] = {}
         self.warnings: list[str] = []
         self._schemas: dict[Hashable, list[ItemCounts | None]] = {}
         self._inputs: dict[tuple[str, ...], _InputPlan] = {}
@@ -207,6 +212,8 @@ class CoverageMerger:
         schemas: dict[tuple, list[int]] = {}
         for i, run in enumerate(runs):
             slot = SLOTS.get(run.verdict)
+            if slot == 2 or slot == 3:
+                self.failing_values[base + i] = _varied(run)
             if run.parameters:
                 inputs.setdefault((run.parameters, slot, True), []).append(i)
             elif run.assignment:

@@ -9,6 +9,9 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+#: Most runs a scatter shows.
+MAX_POINTS = 5_000
+
 #: Item kinds, in the order reports list them.
 KIND_ORDER = ("input", "input_cross", "cover", "cross", "record")
 
@@ -106,6 +109,11 @@ class ItemResult:
     cross: CrossGrid | None = None
     record: RecordSummary | None = None
     notes: tuple[str, ...] = ()
+    #: A cross of two drawn ranges, drawn as a scatter of runs: ``(x, y, verdict, run name)`` per run
+    #: (at most :data:`MAX_POINTS`, evenly chosen); empty for every other item.
+    points: tuple[tuple[float, float, str, str], ...] = ()
+    #: Per axis of a cross (or the item itself), the parameter's short name and unit, for axis labels.
+    axis_units: tuple[str, ...] = ()
 
     @property
     def holes(self) -> tuple[int, ...]:
@@ -130,6 +138,8 @@ class RunTable:
     reasons: tuple[str | None, ...]
     folders: tuple[str | None, ...]
     logs: tuple[str | None, ...]
+    #: The varied values of each failing run, as one short text (``speed=84.27kph, weather=dry``), by run id.
+    values: dict[int, str] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.names)
@@ -160,4 +170,5 @@ class CoverageReport:
         return [item for item in self.items if item.kind in kinds]
 
     def holes_count(self) -> int:
-        return sum(len(item.holes) for item in self.items if item.graded)
+        """Holes of the items that count in the overall grade (weight above 0)."""
+        return sum(len(item.holes) for item in self.items if item.graded and item.weight > 0)

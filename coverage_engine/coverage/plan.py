@@ -61,6 +61,10 @@ class CoveragePlan:
                 return entry
         return self.default
 
+    def names(self, name: str) -> bool:
+        """Whether an entry of the plan (its exact name or a pattern) is about item ``name``."""
+        return name in self.exact or any(fnmatchcase(name, pattern) for pattern, _ in self.patterns)
+
     def unmatched(self, names: list[str]) -> list[str]:
         """Entries of the plan that name no item (likely typos), in file order."""
         known = set(names)

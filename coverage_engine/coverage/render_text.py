@@ -19,6 +19,7 @@ MAX_GRID_ROWS = 40
 MAX_NAMES = 5
 MAX_HOLES = 20
 MAX_FAILING_RUNS = 50
+MAX_REASON_CHARS = 160
 BAR_WIDTH = 20
 
 #: The columns of the tables, with how each is aligned.
@@ -164,7 +165,7 @@ def _grid(item: ItemResult, style: _Style) -> tuple[Text, Table] | None:
     if len(columns) > MAX_GRID_COLUMNS or len(rows) > MAX_GRID_ROWS:
         return None
     table = Table(box=style.box, expand=False)
-    table.add_column(f"{_short(grid.axes[0])} \\ {_short(grid.axes[1])}", no_wrap=True)
+    table.add_column(axes_title(grid.axes), no_wrap=True)
     for label in columns:
         table.add_column(label, justify="right")
     for r, label in enumerate(rows):
@@ -179,14 +180,42 @@ def _grid(item: ItemResult, style: _Style) -> tuple[Text, Table] | None:
             colour = "green" if rate is None or rate >= 99.5 else "yellow" if rate >= 50 else "red"
             cells.append(style.styled(text, colour if bucket.covered else "red"))
         table.add_row(*cells)
-    caption = style.styled(f"  rows: {grid.axes[0]}, columns: {grid.axes[1]}; cells: hits (pass rate), '.' a hole",
-                           "grey50")
+    caption = style.styled(f"  rows: {_short(grid.axes[0])}, columns: {_short(grid.axes[1])}; "
+                           f"cells: hits (pass rate), '.' a hole", "grey50")
     return caption, table
 
 
 def _short(name: str) -> str:
     """An axis name without the ``input:`` prefix and the scenario path."""
     return name.removeprefix("input:").rsplit(".", 1)[-1]
+
+
+def axes_title(axes: tuple[str, ...]) -> str:
+    """The corner of a grid: the parameter down the rows, then the one across the columns."""
+    return f"{_short(axes[0])} ↓  {_short(axes[1])} →"
+
+
+def _scatter(item: ItemResult, style: _Style) -> list[Text] | None:
+    """A cross of two drawn ranges as a character map of its cells: '.' no run, 'o' runs that all passed,
+    'x' a failing run among them (the HTML report draws each run as a point)."""
+    grid = item.cross
+    if not item.points or grid is None or len(grid.labels) != 2:
+        return None
+    rows, columns = grid.labels
+    lines = [style.styled(f"  {len(item.points)} run(s); {axes_title(grid.axes)} {columns[0]} … {columns[-1]}; "
+                          f"'o' runs passed, 'x' a run failed, '.' no run", "grey50")]
+    for r, label in enumerate(rows):
+        line = Text(f"  {label:>{max(len(x) for x in rows)}} ")
+        for c in range(len(columns)):
+            bucket = item.buckets[r * len(columns) + c]
+            if bucket.runs == 0:
+                line.append(".", style="" if style.plain else "grey37")
+            elif bucket.failed or bucket.errored:
+                line.append("x", style="" if style.plain else "bold red")
+            else:
+                line.append("o", style="" if style.plain else "green")
+        lines.append(line)
+    return lines
 
 
 def _holes(item: ItemResult, style: _Style) -> Text | None:
@@ -225,14 +254,14 @@ def _failing(report: CoverageReport, style: _Style) -> Table | None:
     if not failing:
         return None
     table = Table(title=f"Failing runs ({len(failing)})", box=style.box, title_justify="left")
-    for column in ("run", "verdict", "reason", "log"):
+    for column in ("run", "verdict", "values", "reason", "log"):
         table.add_column(column)
     for i in failing[:MAX_FAILING_RUNS]:
-        reason = (runs.reasons[i] or "").splitlines()[0][:80] if runs.reasons[i] else ""
-        table.add_row(runs.names[i], style.styled(runs.verdicts[i], "red"), reason,
+        reason = (runs.reasons[i] or "").splitlines()[0][:MAX_REASON_CHARS] if runs.reasons[i] else ""
+        table.add_row(runs.names[i], style.styled(runs.verdicts[i], "red"), runs.values.get(i, ""), reason,
                       runs.logs[i] or runs.folders[i] or "")
     if len(failing) > MAX_FAILING_RUNS:
-        table.add_row(f"… {len(failing) - MAX_FAILING_RUNS} more", "", "", "")
+        table.add_row(f"… {len(failing) - MAX_FAILING_RUNS} more", "", "", "", "")
     return table
 
 
@@ -240,7 +269,11 @@ def plain_width(report: CoverageReport) -> int:
     """Columns for plain output (a file, a CI log): wide enough that no item name or cell is cut or
     wrapped, as there is no terminal width to fit (at least 120)."""
     longest = max((len(item.name) for item in report.items), default=0)
-    return max(120, longest + 100)
+    runs = report.runs
+    failing = max((len(runs.names[i]) + len(runs.values.get(i, "")) + min(len((runs.reasons[i] or "").split("\n")[0]),
+                   MAX_REASON_CHARS) + len(runs.logs[i] or runs.folders[i] or "") for i in runs.failing()),
+                  default=0)
+    return max(120, longest + 100, failing + 30)
 
 
 def render_text(report: CoverageReport, console: Console, *, plain: bool) -> None:
@@ -257,20 +290,24 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
         console.print(_title(item, style))
         for note in item.notes:
             console.print(style.styled(f"  note: {note}", "yellow"))
-        grid = _grid(item, style)
-        if grid is not None:
+        scatter = _scatter(item, style)
+        grid = _grid(item, style) if scatter is None else None
+        if scatter is not None:
+            for line in scatter:
+                console.print(line)
+        elif grid is not None:
             caption, cells = grid
             console.print(caption)
             console.print(cells)
         elif item.buckets:
             console.print(_bucket_table(item, names, style))
-        holes = _holes(item, style) if grid is None else (
+        holes = _holes(item, style) if grid is None and scatter is None else (
             style.styled(f"  holes: {len(item.holes)} of {len(item.buckets)} cells (the dots)", "red")
             if item.holes else None)
         if holes is not None:
             console.print(holes)
         console.print()
-    for table in (_records(report, style), _failing(report, style)):
-        if table is not None:
-            console.print(cells)
+    for section in (_records(report, style), _failing(report, style)):
+        if section is not None:
+            console.print(section)
             console.print()

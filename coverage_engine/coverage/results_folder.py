@@ -16,7 +16,7 @@ location; the run still counts through its verdict.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import yaml
@@ -26,6 +26,7 @@ from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
+from coverage_engine.files.sce_domains import InputDomain, header_domains
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
 REPORT_FILE = "test.xml"
@@ -33,6 +34,9 @@ LOG_FILE = "log.txt"
 
 #: Largest .sce file read for its assignment.
 MAX_SCE_BYTES = 16 * 1024 * 1024
+
+#: How much of a ``.sce`` is read for its header's ``# domain`` lines.
+MAX_HEADER_CHARS = 256 * 1024
 
 #: Verdicts a batch job's ``status`` property names, mapped to run verdicts.
 _STATUS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error"}
@@ -44,6 +48,15 @@ def _inside(root: Path, path: Path) -> bool:
         return path.resolve().is_relative_to(root)
     except OSError:
         return False
+
+
+def _domains_from_sce(path: str) -> list[InputDomain]:
+    """The ``# domain`` lines of a ``.sce`` file's header ([] when it cannot be read)."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            return header_domains(handle.read(MAX_HEADER_CHARS))
+    except OSError:
+        return []
 
 
 def _assignment_from_sce(path: str) -> dict[str, object]:
@@ -71,6 +84,16 @@ class _Reader:
         self.skipped_links: list[str] = []
         self.missing_folders = 0
         self.orders: dict[frozenset, tuple[str, ...]] = {}
+        self.declared: dict[tuple[str, frozenset], list[InputDomain]] = {}
+
+    def declare(self, scenario_file: str, keys: Iterable[str]) -> None:
+        """Note what the variation declared for ``keys`` (the ``# domain`` lines of the ``.sce`` a run ran),
+        read once per folder of variants and set of parameters."""
+        if not scenario_file.endswith(".sce"):
+            return
+        group = (os.path.dirname(scenario_file), frozenset(keys))
+        if group not in self.declared:
+            self.declared[group] = _domains_from_sce(scenario_file)
 
     def in_declared_order(self, assignment: dict[str, object], scenario_file: str) -> dict[str, object]:
         """The report's properties are sorted by name; the first ``.sce`` of a parameter set gives their order."""
@@ -105,6 +128,8 @@ class _Reader:
         log = self.file(folder, LOG_FILE) if folder is not None else None
         if coverage is not None and coverage.run.assignment:
             assignment = dict(coverage.run.assignment)
+            if coverage.run.source:
+                self.declare(coverage.run.source, assignment)
         return RunInput(
             name=name, verdict=verdict, reason=reason, folder=str(folder) if folder is not None else None,
             log=str(log) if log is not None else None, assignment=assignment,
@@ -175,6 +200,7 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _R
                 assignment = _assignment_from_sce(scenario_file)
             else:
                 assignment = reader.in_declared_order(assignment, scenario_file)
+            reader.declare(scenario_file, assignment)
             coverage = reader.coverage(folder) if folder is not None else None
             yield reader.run(name, folder, verdict, reason, assignment, coverage)
     except JunitUnreadable as exc:
@@ -240,6 +266,8 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
             source.notes.append(f"{len(reader.skipped_links)} link(s) leading out of the folder were not "
                                 f"followed: {', '.join(reader.skipped_links[:3])}")
         source.warnings.extend(reader.warnings)
+        for domains in reader.declared.values():
+            source.declare(domains)
 
     source.runs = stream()
     return source

@@ -12,6 +12,7 @@ from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.run_records import ItemDecl
+from coverage_engine.files.sce_domains import InputDomain
 
 #: Verdicts of a run in a report: the run file's four, plus ``pending`` (queued or running, not finished).
 REPORT_VERDICTS = ("passed", "failed", "error", "skipped", "pending")
@@ -53,3 +54,12 @@ class RunSource:
     notes: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     root: str | None = None   # the local results folder, for links
+    #: What the variation declared per varied parameter (the ``.sce`` headers' ``# domain`` lines), by key;
+    #: filled while the runs are read.
+    domains: dict[str, InputDomain] = field(default_factory=dict)
+
+    def declare(self, domains: Iterable[InputDomain]) -> None:
+        """Add the declarations of one variation (two generations of a source add up)."""
+        for domain in domains:
+            known = self.domains.get(domain.key)
+            self.domains[domain.key] = domain if known is None else known.merged(domain)

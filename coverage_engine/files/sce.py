@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
+from coverage_engine.files.sce_domains import InputDomain, header_domains
 from coverage_engine.files.sce_plain import load_plain
 from coverage_engine.location import Location
 
@@ -96,6 +97,8 @@ class SceDocument:
     parameters: dict[str, object] | None = None
     path: str = ""
     extra: dict[str, object] = field(default_factory=dict)
+    #: What the variation declared per varied parameter (the header's ``# domain`` lines).
+    domains: tuple[InputDomain, ...] = ()
 
 
 def is_sce_text(head: str) -> bool:
@@ -224,7 +227,7 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     return SceDocument(
         text=padded, source_dir=source_dir, scenario=scenario, assignment=dict(data["assignment"]),
         format_version=version, source=data["source"], source_sha256=data["source_sha256"],
-        index=index, parameters=parameters, path=path, extra=extra)
+        index=index, parameters=parameters, path=path, extra=extra, domains=tuple(header_domains(text)))
 
 
 #: The last few files read, by path and identity (size, modification time, inode): a run reads its

@@ -19,8 +19,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from coverage_engine.files.sce import SCE_END, SCE_FORMAT_VERSION, SCE_MAGIC
+from coverage_engine.files.sce_domains import InputDomain, domain_line, drawn_text
 from coverage_engine.files.sce_plain import YAML_SPECIAL
-from coverage_engine.lazy import NumberTexts, per_choice, row_texts
+from coverage_engine.lazy import Mapped, NumberTexts, per_choice, row_texts
 
 #: A model holding a character YAML reads specially cannot be a literal block: it is quoted instead.
 _BLOCK_UNSAFE = YAML_SPECIAL
@@ -116,7 +117,8 @@ class SceTemplate:
     def __init__(self, *, source: str, source_sha256: str, source_dir: str, scenario: str,
                  chunks: list[str], replacements: Sequence[Sequence[str]], keys: list[str],
                  shown: Sequence[Sequence[str]], stored: Sequence[Sequence[object]],
-                 documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None) -> None:
+                 documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None,
+                 domains: Sequence[InputDomain] = ()) -> None:
         model = "".join(chunks)
         # Listed values are checked one by one; a lazy slot holds drawn numbers (plain one-line text).
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
@@ -130,6 +132,7 @@ class SceTemplate:
         self._replacements = replacements
         self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
         self._of = f" of {_one_line(Path(source).name)}\n" + (f"# {_one_line(note)}\n" if note else "")
+        self._domains = "".join(domain_line(d) for d in domains)
         self._head = (
             f"format_version: {SCE_FORMAT_VERSION}\n"
             f"source: {_quote(source)}\n"
@@ -143,9 +146,10 @@ class SceTemplate:
         self._documents = None if documents is None else [f"parameters: {_quote(d)}\n" for d in documents]
         self.text_dimensions = len(replacements)
         # Per dimension, the drawn numbers when each of its texts is a number in fixed text (else None).
-        self._drawn = [_drawn_numbers([self._comments[i], self._entries[i]]
+        self._drawn = [_drawn_numbers([self._entries[i]]
                                      + ([replacements[i]] if i < len(replacements) else []))
                        for i in range(len(keys))]
+        self._unspelled: list[str | None] = [None] * len(keys)   # header comments round drawn numbers
         self._drawn_axes = [(axis, numbers) for axis, numbers in enumerate(self._drawn) if numbers is not None]
 
     def model_text(self, choices: tuple[int, ...] | list[int]) -> str:
@@ -177,8 +181,8 @@ class SceTemplate:
         if spelled is None:
             spelled = self.spell_row(choices)
         parts = [self._magic, str(index), self._of]
-        parts += row_texts(self._comments, choices, spelled)
-        parts += [self._head, str(index), "\n"]
+        parts += row_texts(self._comments, choices, self._unspelled)
+        parts += [self._domains, self._head, str(index), "\n"]
         if self._entries:
             parts.append("assignment:\n")
             parts += row_texts(self._entries, choices, spelled)
@@ -209,7 +213,8 @@ def _comments(key: str, texts: Sequence[str]) -> Sequence[str]:
     """The header comment line of each choice of one dimension (``# key = value``)."""
     head = f"# {_one_line(key)} = "
     if isinstance(texts, NumberTexts) and _PLAIN_WORD.fullmatch(texts.prefix + texts.suffix):
-        return texts.around(head, "\n")            # a number's repr is one plain word too
+        prefix, suffix = head + texts.prefix, texts.suffix + "\n"   # a drawn number: rounded, with its unit
+        return Mapped(texts.numbers, lambda number: prefix + drawn_text(number) + suffix)
     return per_choice(texts, lambda text: f"{head}{_one_line(text)}\n")
 
 

@@ -20,8 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.files.sce import is_sce_text
+from coverage_engine.files.sce_domains import InputDomain, listed_domain
 from coverage_engine.files.sce_writer import SceTemplate, relative_source_dir
 from coverage_engine.lazy import NumberTexts, per_choice, row_texts
+from coverage_engine.variation.drawn import DrawnChoices
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
 
@@ -53,7 +55,23 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         source=plan.path.name, source_sha256=source_sha256(plan.text),
         source_dir=relative_source_dir(plan.path.parent, output_dir), scenario=plan.scenario,
         chunks=list(plan.template.chunks), replacements=list(plan.template.replacements),
-        keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note)
+        keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note,
+        domains=plan_domains(plan))
+
+
+def plan_domains(plan: VariationPlan) -> list[InputDomain]:
+    """What each dimension of ``plan`` declares (its listed values, or the range a sampler drew from):
+    the ``# domain`` lines input coverage is measured against."""
+    domains = []
+    for dim in plan.dimensions:
+        choices = dim.choices
+        if isinstance(choices, DrawnChoices):
+            spec = choices.spec
+            domains.append(InputDomain(dim.key, low=spec.low, high=spec.high, unit=spec.unit,
+                                       samples=plan.design_samples or len(choices)))
+        else:
+            domains.append(listed_domain(dim.key, [c.stored for c in choices]))
+    return domains
 
 
 @dataclass(frozen=True, slots=True)

@@ -117,6 +117,8 @@ class VariationPlan:
     excluded_by: dict[str, int] = field(default_factory=dict)
     #: How the variants were chosen (``strategy lhs, samples 200, seed 7``), written in each ``.sce`` header.
     strategy_note: str | None = None
+    #: The number of points a sampler was asked for (``--samples``), recorded with each drawn range.
+    design_samples: int | None = None
 
     # -- axes ---------------------------------------------------------------------------------------
 

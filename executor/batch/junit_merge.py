@@ -26,10 +26,10 @@ from pathlib import Path
 from executor.batch.junit_read import JunitUnreadable, read_cases
 from executor.junit import failure_text, iso_timestamp
 from executor.junit_document import Case, document, suite_element
-from executor.junit_names import declared_scenarios, scenario_classname, variant_name
+from executor.junit_names import declared_scenarios, drawn_units, scenario_classname, variant_name
 from store.jobs import Job
 from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
-from store.variant_lookup import VariantInfo
+from store.variant_lookup import HEADER_CHARS, VariantInfo
 
 #: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
 REPORT_LOG_CHARS = 16 * 1024
@@ -99,7 +99,7 @@ def _variant_from_file(path: str) -> VariantInfo | None:
         document = parse_sce(text, path)
     except OscError:
         return None
-    return VariantInfo(document.assignment, document.scenario, document.source)
+    return VariantInfo(document.assignment, document.scenario, document.source, text[:HEADER_CHARS])
 
 
 def job_names(job: Job, variant: VariantInfo | None = None) -> JobNames:
@@ -109,7 +109,7 @@ def job_names(job: Job, variant: VariantInfo | None = None) -> JobNames:
     if variant is not None and variant.scenario:
         source = variant.source or job.name
         return JobNames(scenario_classname(source, variant.scenario),
-                        variant_name(job.name, variant.assignment, variant.scenario))
+                        variant_name(job.name, variant.assignment, variant.scenario, drawn_units(variant.header)))
     text = _peek(job.scenario_path) if job.scenario_path.endswith(".osc") else None
     scenarios = declared_scenarios(text) if text else []
     stem = Path(job.scenario_path).stem or job.name

@@ -132,7 +132,8 @@ def report_names(scenario: str, runs=(), document=None):
     from executor.junit import report_names as names_for
 
     document = document or _variant(scenario)
-    variant = (document.source, document.scenario, document.assignment) if document is not None else None
+    variant = (document.source, document.scenario, document.assignment,
+               {d.key: d.unit for d in document.domains if d.drawn}) if document is not None else None
     return names_for(scenario, [(run.name, run.scenario.name) for run in runs], variant)
 
 

@@ -153,6 +153,7 @@ def run(request: VariationRequest) -> int:
         seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
         tuples = strategies.build_covering_array(plan, options, seeds) if covering else None
         plan.strategy_note = strategies.describe_options(options)
+        plan.design_samples = options.samples
         report.describe(plan)
         if request.strategy != "full":
             echo(_strategy_summary(plan, request, tuples))

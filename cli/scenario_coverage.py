@@ -1,13 +1,13 @@
 """``scenario_coverage``: report the coverage of a batch (or of one run) in the terminal, as JSON or as HTML.
 
-    scenario_coverage report [RESULTS] [--store URL] [--batch ID] [--plan F] [-o FILE] [--fail-under PCT]
-    scenario_coverage html   [RESULTS] [...] [-o coverage.html]
-    scenario_coverage json   [RESULTS] [...] [-o FILE]
+    scenario_coverage report [RESULTS...] [--store URL] [--batch ID] [--plan F] [-o FILE] [--fail-under PCT]
+    scenario_coverage html   [RESULTS...] [...] [-o coverage.html]
+    scenario_coverage json   [RESULTS...] [...] [-o FILE]
 
 Thin click commands: the reading, merging and grading is :mod:`coverage_engine.coverage` (and
 :mod:`executor.coverage_source` for a store); here options are parsed, and :mod:`cli.boundary` turns
-errors into messages and exit codes. Where the runs come from: ``RESULTS`` (a results folder or one
-run's folder) unless ``--store`` is on the command line; with ``--store``, or without ``RESULTS``, the
+errors into messages and exit codes. Where the runs come from: ``RESULTS`` (results folders, a folder
+of shards' results folders, or one run's folder; several are merged) unless ``--store`` is on the command line; with ``--store``, or without ``RESULTS``, the
 store (``--store``, ``$SCENARIO_STORE`` or the default file), which is only read: a store that is not
 there is an error and nothing is created or upgraded.
 
@@ -50,7 +50,7 @@ def _common(func: F) -> F:
                         help="The batch of the store (default: the latest batch of RESULTS, or the latest "
                              "batch).")(func)
     func = store_option(func)
-    return click.argument("results", required=False, type=click.Path(file_okay=True))(func)
+    return click.argument("results", nargs=-1, type=click.Path(file_okay=True))(func)
 
 
 def _store_named() -> bool:
@@ -59,21 +59,24 @@ def _store_named() -> bool:
     return source is click.core.ParameterSource.COMMANDLINE
 
 
-def _report(results: str | None, store_url: str | None, batch_id: int | None,
+def _report(folders: tuple[str, ...], store_url: str | None, batch_id: int | None,
             plan_file: str | None) -> CoverageReport:
     from coverage_engine.coverage.grading import build_report
     from coverage_engine.coverage.plan import read_plan
 
     named = _store_named()
-    if results is not None and not named and batch_id is not None:
+    if folders and not named and batch_id is not None:
         raise click.UsageError("--batch needs --store")
+    if len(folders) > 1 and named:
+        raise click.UsageError("--store reads one batch: give at most one RESULTS folder with it")
     plan = read_plan(plan_file) if plan_file else None
-    if results is not None and not named:
-        from coverage_engine.coverage.results_folder import read_results_folder
+    if folders and not named:
+        from coverage_engine.coverage.results_folder import read_results_folders
 
-        return build_report(read_results_folder(results), plan)
+        return build_report(read_results_folders(list(folders)), plan)
     from executor.coverage_source import store_source
 
+    results = folders[0] if folders else None
     try:
         source = store_source(store_url, results, batch_id)
     except StoreMissing as exc:
@@ -105,9 +108,10 @@ def _output_path(output: str) -> str:
 @click.command(context_settings=CONTEXT)
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE.")
-def report_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+def report_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                    fail_under: float | None, debug: bool, output: str | None) -> int:
-    """Print the coverage of RESULTS: items, buckets, grades, holes and failing runs."""
+    """Print the coverage of RESULTS (one or more results folders, merged): items, buckets, grades, holes and
+    failing runs."""
     from rich.console import Console
 
     from coverage_engine.coverage.render_text import plain_width, render_text
@@ -137,7 +141,7 @@ def report_command(results: str | None, store_url: str | None, batch_id: int | N
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="coverage.html", show_default=True,
               help="The HTML file to write (one self-contained file).")
-def html_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
     from coverage_engine.coverage.atomic import write_text_atomically
@@ -157,7 +161,7 @@ def html_command(results: str | None, store_url: str | None, batch_id: int | Non
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="-", show_default=True,
               help="The JSON file to write ('-': standard output).")
-def json_command(results: str | None, store_url: str | None, batch_id: int | None, plan_file: str | None,
+def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
     from coverage_engine.coverage.atomic import write_text_atomically

@@ -55,6 +55,15 @@ def test_the_gitlab_recipe(tmp_path):
         done = shell(line, folder)
         assert done.returncode == 0, line + "\n" + done.stdout + done.stderr
     assert (folder / "coverage.html").stat().st_size > 1000
+    _assert_every_shard_merged(done.stdout, folder)
+
+
+def _assert_every_shard_merged(report: str, folder: Path) -> None:
+    """The recipe's last line is the plain report of the merged shards: complete, every variant counted."""
+    variants = len(list((folder / "out").glob("*.sce")))
+    head = report.splitlines()[0]
+    assert head.endswith("[complete]") and f": {variants} run(s)" in head, report
+    assert "INCOMPLETE" not in report
 
 
 def test_the_github_workflow(tmp_path):
@@ -74,7 +83,8 @@ def test_the_github_workflow(tmp_path):
     for line in runs("coverage"):
         done = shell(line, folder)
         assert done.returncode == 0, line + "\n" + done.stdout + done.stderr
-    assert "scenario_coverage report merged --fail-under" in " ".join(runs("coverage"))
+    assert runs("coverage")[-1].startswith("scenario_coverage report results --fail-under")
+    _assert_every_shard_merged(done.stdout, folder)
 
 
 def test_the_kubernetes_workers_share_one_postgresql_store(tmp_path, pg_url):

@@ -169,6 +169,14 @@ def _scatter(counts: ItemCounts, names: list[str]) -> tuple[tuple[float, float, 
     return tuple(points)
 
 
+def _declared_range(counts: ItemCounts) -> tuple[float, float, str]:
+    bucketing = counts.bucketing
+    assert isinstance(bucketing, InputValueBuckets) and bucketing.domain is not None
+    domain = bucketing.domain
+    assert domain.low is not None and domain.high is not None
+    return domain.low, domain.high, domain.unit
+
+
 def apply_domains(merger: CoverageMerger, domains: Mapping[str, InputDomain]) -> None:
     """Give each varied parameter what the variation declared for it, and the ``every`` of a ``cover()``
     of the same parameter in the same unit (it then sets the width of the range's buckets)."""
@@ -194,6 +202,7 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
     buckets: list[BucketResult] = []
     grade: float | None = None
     points: tuple[tuple[float, float, str, str], ...] = ()
+    ranges: tuple[tuple[float, float, str], ...] = ()
     weight = settings.weight
     if counts.kind == "record":
         record = _record(counts)
@@ -201,6 +210,7 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         buckets, grid, notes = _cross_buckets(counts, settings.at_least, make)
         if counts.kind == "input_cross" and all(_drawn(c) for c in counts.components):
             points = _scatter(counts, make.names)
+            ranges = tuple(_declared_range(c) for c in counts.components)
             if not plan.names(counts.name):
                 weight = 0.0
                 notes.append("a cross of two sampled ranges: a scatter of the runs, not part of the overall "
@@ -226,7 +236,7 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         range=decl.range if decl else None, every=counts.bucketing.every
         if getattr(counts.bucketing, "kind", "") == "range" else None,
         samples=counts.samples, runs_sampled=counts.runs_sampled, ignored=counts.ignored, cross=grid,
-        record=record, notes=tuple(notes), points=points)
+        record=record, notes=tuple(notes), points=points, axis_ranges=ranges)
 
 
 def overall_grade(items: list[ItemResult]) -> float | None:

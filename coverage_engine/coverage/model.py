@@ -112,8 +112,8 @@ class ItemResult:
     #: A cross of two drawn ranges, drawn as a scatter of runs: ``(x, y, verdict, run name)`` per run
     #: (at most :data:`MAX_POINTS`, evenly chosen); empty for every other item.
     points: tuple[tuple[float, float, str, str], ...] = ()
-    #: Per axis of a cross (or the item itself), the parameter's short name and unit, for axis labels.
-    axis_units: tuple[str, ...] = ()
+    #: Per axis of a scatter, the declared range and its unit: ``(low, high, unit)``.
+    axis_ranges: tuple[tuple[float, float, str], ...] = ()
 
     @property
     def holes(self) -> tuple[int, ...]:

@@ -16,6 +16,7 @@ from importlib import resources
 from urllib.parse import quote
 
 from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult
+from coverage_engine.coverage.render_svg import scatter_svg
 
 MAX_CHIPS = 6
 MAX_NAMES_IN_DETAILS = 200
@@ -303,16 +304,18 @@ class _Page:
     def item_card(self, index: int, item: ItemResult) -> str:
         grade = (f'<span class="grade" style="color:{_grade_colour(item.grade)}">{_pct(item.grade)}'
                  f'<span class="muted" style="font-weight:400;font-size:12px"> ({item.covered_count}/'
-                 f'{len(item.buckets)})</span></span>' if item.graded else '<span class="grade muted">not graded</span>')
+                 f'{len(item.buckets)})</span></span>' if item.graded and item.weight > 0 else
+                 f'<span class="grade muted">{_pct(item.grade)} · weight 0</span>' if item.graded else
+                 '<span class="grade muted">not graded</span>')
         text = f'<div class="text">{escape(item.text)}</div>' if item.text else ""
         notes = "".join(f'<div class="callout">{escape(n)}</div>' for n in item.notes)
-        body = self.heat_map(item)
+        body = scatter_svg(item) or self.heat_map(item)
         if body is None and item.buckets:
             body = self.bucket_rows(item) if len(item.buckets) <= MAX_BUCKET_ROWS else self.histogram(item)
         return (f'<article class="item" id="item-{index}"><header><h3>{escape(item.name)}</h3>'
                 f'<span class="kind">{KIND_TITLES[item.kind]}</span>{grade}</header>'
                 f'<div class="facts">{self.facts(item)}</div>{text}{notes}{body or ""}'
-                f'{self.holes(item) if item.graded else ""}</article>')
+                f'{self.holes(item) if item.graded and not item.points else ""}</article>')
 
     def item_groups(self) -> str:
         groups = (
@@ -380,11 +383,13 @@ class _Page:
                                                f'<a href="{log}">log</a>' if log else "") if x)
                 reason = escape((runs.reasons[i] or "").strip().splitlines()[0] if runs.reasons[i] else "")
                 out.append(f'<tr><td class="mono">{escape(runs.names[i])}</td>'
-                           f'<td><span class="verdict {runs.verdicts[i]}">{runs.verdicts[i]}</span></td>'
+                           f'<td><span class="verdict {escape(runs.verdicts[i])}">{escape(runs.verdicts[i])}</span></td>'
+                           f'<td class="mono">{escape(runs.values.get(i, ""))}</td>'
                            f'<td class="reason" title="{reason}">{reason}</td><td>{links}</td></tr>')
             return "".join(out)
 
-        head = ('<table class="overview runs"><thead><tr><th>run</th><th>verdict</th><th>reason</th><th>files</th>'
+        head = ('<table class="overview runs"><thead><tr><th>run</th><th>verdict</th><th>values</th><th>reason</th>'
+                '<th>files</th>'
                 '</tr></thead><tbody>')
         shown, rest = failing[:MAX_FAILING_SHOWN], failing[MAX_FAILING_SHOWN:MAX_FAILING_ROWS]
         more = ""

@@ -38,6 +38,8 @@ def _item(item: ItemResult, names: tuple[str, ...]) -> dict[str, Any]:
     }
     if item.cross is not None:
         out["cross"] = {"axes": list(item.cross.axes), "labels": [list(axis) for axis in item.cross.labels]}
+    if item.points:
+        out["points"] = [{"x": x, "y": y, "verdict": verdict, "run": name or None} for x, y, verdict, name in item.points]
     if item.record is not None:
         rec, ext = item.record, item.record.extremes
         out["record"] = {
@@ -61,8 +63,9 @@ def report_dict(report: CoverageReport) -> dict[str, Any]:
         "runs": {"total": len(runs), **report.verdict_counts},
         "notes": list(report.notes), "warnings": list(report.warnings),
         "items": [_item(item, names) for item in report.items],
-        "failing_runs": [{"name": names[i], "verdict": runs.verdicts[i], "reason": runs.reasons[i],
-                          "folder": runs.folders[i], "log": runs.logs[i]} for i in runs.failing()],
+        "failing_runs": [{"name": names[i], "verdict": runs.verdicts[i], "values": runs.values.get(i),
+                          "reason": runs.reasons[i], "folder": runs.folders[i], "log": runs.logs[i]}
+                         for i in runs.failing()],
     }
 
 

@@ -301,9 +301,13 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
             console.print(cells)
         elif item.buckets:
             console.print(_bucket_table(item, names, style))
-        holes = _holes(item, style) if grid is None and scatter is None else (
-            style.styled(f"  holes: {len(item.holes)} of {len(item.buckets)} cells (the dots)", "red")
-            if item.holes else None)
+        if scatter is not None:
+            holes = None        # a scatter's empty cells are no goal (weight 0 unless a plan names it)
+        elif grid is None:
+            holes = _holes(item, style)
+        else:
+            holes = style.styled(f"  holes: {len(item.holes)} of {len(item.buckets)} cells (the dots)",
+                                 "red") if item.holes else None
         if holes is not None:
             console.print(holes)
         console.print()

@@ -245,8 +245,12 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
     root = given.resolve()
     reader = _Reader(root)
     source = RunSource(label=str(given), runs=iter(()), root=str(root))
-    folders = _job_folders(root, reader)
     report = reader.file(root, REPORT_FILE)
+    if report is None and reader.file(root, RUN_FILE) is None:
+        shards = _shards(root)
+        if shards:
+            return read_results_folders([str(given / name) for name in shards], label=str(given))
+    folders = _job_folders(root, reader)
     if report is not None and _is_merged(report):
         runs: Iterator[RunInput] = _merged_batch(root, report, folders, reader, source)
     elif report is not None or reader.file(root, RUN_FILE) is not None:
@@ -271,3 +275,39 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
 
     source.runs = stream()
     return source
+
+
+def _shards(root: Path) -> list[str]:
+    """The sub-folders of ``root`` that are results folders of their own (a merged ``test.xml`` each):
+    the shards of a batch, or batches, gathered in one folder."""
+    names = []
+    for entry in sorted(os.scandir(root), key=lambda e: e.name):
+        if entry.name.startswith(".") or not entry.is_dir(follow_symlinks=False):
+            continue
+        report = Path(entry.path) / REPORT_FILE
+        if report.is_file() and not report.is_symlink() and _is_merged(report):
+            names.append(entry.name)
+    return names
+
+
+def read_results_folders(paths: list[str], label: str | None = None) -> RunSource:
+    """The runs of several results folders (shards of one batch, or batches) as one source: complete when
+    each is, with each one's notes (prefixed by its folder) and what each variation declared."""
+    if len(paths) == 1 and label is None:
+        return read_results_folder(paths[0])
+    sources = [read_results_folder(path) for path in paths]     # each checked before any is read
+    roots = [s.root for s in sources if s.root]
+    combined = RunSource(label=label or ", ".join(paths), runs=iter(()),
+                         root=os.path.commonpath(roots) if roots else None)
+
+    def stream() -> Iterator[RunInput]:
+        for path, part in zip(paths, sources, strict=True):
+            yield from part.runs
+            combined.complete = combined.complete and part.complete
+            combined.notes.extend(f"{path}: {note}" for note in part.notes)
+            combined.warnings.extend(part.warnings)
+            combined.declare(part.domains.values())
+        combined.notes.insert(0, f"{len(paths)} results folders merged: {', '.join(Path(p).name for p in paths)}")
+
+    combined.runs = stream()
+    return combined

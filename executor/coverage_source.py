@@ -80,7 +80,9 @@ class _StoreRuns:
         """A job whose coverage the store holds: its body decoded against the shared declarations."""
         known = self.declarations
         decls, parameters = known[schema_id] if schema_id in known else self._schema(schema_id)
-        values, one, samples, ignored = _decode(body)[0]
+        decoded = _decode(body)[0]
+        values, one, samples, ignored = decoded[:4]
+        unsampled = decoded[4] if len(decoded) > 4 else ()
         log = folder and f"{folder}/log.txt"
         names = parameters or None
         assignment: dict[str, object] = {}
@@ -89,7 +91,7 @@ class _StoreRuns:
         if decls is None:
             return RunInput(row.name, verdict, row.reason, folder, log, assignment, parameters=names, values=values)
         return RunInput(row.name, verdict, row.reason, folder, log, assignment, decls, samples or (),
-                        ignored or (), schema_id, one, names, values)
+                        ignored or (), schema_id, one, names, values, unsampled)
 
     def _folder_run(self, row: StoredRun, verdict: str, folder: str | None) -> RunInput:
         """A job without coverage in the store: its ``coverage.json`` when its folder is on this host."""
@@ -104,6 +106,7 @@ class _StoreRuns:
             else:
                 self.from_disk += 1
                 run.items, run.samples, run.ignored = coverage.items, coverage.samples, coverage.ignored
+                run.unsampled = coverage.unsampled
                 assignment = dict(coverage.run.assignment)
         if not assignment and row.variant_assignment:
             assignment = self._variant(row.variant_assignment)

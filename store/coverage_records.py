@@ -12,7 +12,8 @@ Two tables (SQLAlchemy Core, on the shared :data:`store.database.metadata`):
     fast: ``[values, one, samples, ignored]`` — the assignment's values in the schema's parameter
     order; then either ``one`` (every item has exactly one sample, the common case: one value per item)
     or ``samples`` (one list per item), the other null; and ``ignored`` (per item, the samples dropped
-    at run time) or null when none were.
+    at run time) or null when none were. A fifth element, ``unsampled`` (per item), follows only when a
+    failing run noted the values of items whose event never came.
 
 The batch runner calls :meth:`CoverageRecords.record` with the job's document (already read and
 validated by ``coverage_engine.coverage.run_file``) when it records the job's result; reports read
@@ -74,7 +75,7 @@ job_coverage = Table(
 COVERAGE_TABLES = [coverage_schemas, job_coverage]
 
 #: Keys of an item that hold its samples rather than its declaration.
-_SAMPLE_KEYS = ("samples", "ignored")
+_SAMPLE_KEYS = ("samples", "ignored", "unsampled")
 
 
 class StoredRun(NamedTuple):
@@ -102,6 +103,9 @@ def split_document(document: Mapping[str, Any]) -> tuple[str, str, str]:
     one = [values[0] for values in samples] if all(len(values) == 1 for values in samples) else None
     ignored = [item.get("ignored") or 0 for item in items]
     body = [list(assignment.values()), one, None if one is not None else samples, ignored if any(ignored) else None]
+    unsampled = [item.get("unsampled") or [] for item in items]
+    if any(unsampled):
+        body.append(unsampled)     # a failing run's values of items whose event never came (rare: kept last)
     dump = json.dumps
     return (dump(shared, sort_keys=True, separators=(",", ":"), ensure_ascii=False),
             dump(run, separators=(",", ":"), ensure_ascii=False, allow_nan=False),
@@ -111,16 +115,19 @@ def split_document(document: Mapping[str, Any]) -> tuple[str, str, str]:
 def join_document(shared: Mapping[str, Any], run: Mapping[str, Any], body: Sequence[Any],
                   format_name: str, format_version: int) -> dict[str, Any]:
     """The coverage document again, from its three parts (the inverse of :func:`split_document`)."""
-    values, one, samples, ignored = body
+    values, one, samples, ignored = body[:4]
     if one is not None:
         samples = [[value] for value in one]
     ignored = ignored or [0] * len(samples)
+    unsampled = body[4] if len(body) > 4 else [[] for _ in samples]
     items = []
-    for decl, item_samples, dropped in zip(shared["items"], samples, ignored, strict=False):
+    for decl, item_samples, dropped, missed in zip(shared["items"], samples, ignored, unsampled, strict=False):
         item = dict(decl)
         if dropped:
             item["ignored"] = dropped
         item["samples"] = item_samples
+        if missed:
+            item["unsampled"] = missed
         items.append(item)
     assignment = dict(zip(shared["parameters"], values, strict=False))
     return {"format": format_name, "format_version": format_version, "run": {**run, "assignment": assignment},

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from coverage_engine.coverage.buckets import MemberBuckets, RangeBuckets
-from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.errors import PlanError
+from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.plan import parse_plan
 
 

@@ -102,7 +102,10 @@ def test_variants_merge_into_exact_buckets_grades_and_holes(tmp_path):
     assert speed["holes"] == ["[0..20)", "[60..80)", "[100..120]"]
     assert speed["grade"] == pytest.approx(50.0)
     assert items["cut_in.side"]["grade"] == pytest.approx(50.0) and items["cut_in.side"]["holes"] == ["right"]
-    assert items["cut_in.big_gap"]["holes"] == ["false"]      # gap 0.5 runs failed before their end
+    big_gap = items["cut_in.big_gap"]                           # gap 0.5 runs failed before their end:
+    assert big_gap["holes"] == [] and big_gap["not_sampled"] == ["false"]       # a failing region, no hole
+    assert big_gap["grade"] == pytest.approx(50.0)
+    assert sorted(big_gap["buckets"][0]["failed_here"]) == sorted(r["name"] for r in report["failing_runs"])
     cross = items["cut_in.side_x_speed"]
     assert cross["grade"] == pytest.approx(25.0)               # 3 of 6 x 2 cells
     headway = items["cut_in.headway"]["record"]

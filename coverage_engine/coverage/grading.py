@@ -66,15 +66,18 @@ class _Buckets:
             return tuple(unique)
         return tuple(sorted(unique, key=self.rank.__getitem__))
 
-    def make(self, label: str, stats: list[int], failing: list[int], target: int, low=None, high=None) -> BucketResult:
+    def make(self, label: str, stats: list[int], failing: list[int], target: int, low=None, high=None,
+             failed_here: list[int] | None = None) -> BucketResult:
         return BucketResult(label=label, hits=stats[0], passed=stats[1], failed=stats[2], errored=stats[3],
-                            target=target, failing_runs=self.order(failing), low=low, high=high)
+                            target=target, failing_runs=self.order(failing), low=low, high=high,
+                            failed_here=self.order(failed_here) if failed_here else ())
 
 
 def _plain_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[list[BucketResult], list[str]]:
     defs, index = counts.bucketing.finish(list(counts.stats))
     sums = [[0, 0, 0, 0] for _ in defs]
     failing: list[list[int]] = [[] for _ in defs]
+    here: list[list[int]] = [[] for _ in defs]
     for key, st in counts.stats.items():
         i = index[key]
         row = sums[i]
@@ -83,8 +86,12 @@ def _plain_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[lis
         runs = counts.failing.get(key)
         if runs:
             failing[i].extend(runs)
+    for key, runs in counts.failed_here.items():
+        if key in index:
+            here[index[key]].extend(runs)
     labels = [d.label for d in defs]
-    return [make.make(d.label, sums[i], failing[i], target, d.low, d.high) for i, d in enumerate(defs)], labels
+    return [make.make(d.label, sums[i], failing[i], target, d.low, d.high, here[i])
+            for i, d in enumerate(defs)], labels
 
 
 def _component_axis(component: ItemCounts, extra_keys: set) -> tuple[list[str], dict[Hashable, int]]:
@@ -126,13 +133,23 @@ def _cross_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[lis
         runs = counts.failing.get(key)
         if runs:
             failing[flat].extend(runs)
+    here: dict[int, list[int]] = {}
+    for key, runs in counts.failed_here.items():
+        try:
+            flat = 0
+            for position, part in enumerate(_parts(key)):
+                flat = flat * len(labels[position]) + indexes[position][part]
+        except KeyError:
+            continue
+        here.setdefault(flat, []).extend(runs)
     buckets = []
     for flat in range(cells):
         parts, rest = [], flat
         for axis in reversed(labels):
             rest, i = divmod(rest, len(axis))
             parts.append(axis[i])
-        buckets.append(make.make(" × ".join(reversed(parts)), sums[flat], failing[flat], target))
+        buckets.append(make.make(" × ".join(reversed(parts)), sums[flat], failing[flat], target,
+                                 failed_here=here.get(flat)))
     return buckets, grid, []
 
 

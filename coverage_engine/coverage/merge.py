@@ -68,7 +68,8 @@ class ItemCounts:
     """The counts of one item so far; ``kind`` is input, input_cross, cover, cross or record."""
 
     __slots__ = ("name", "kind", "decl", "bucketing", "stats", "failing", "ignored", "overflow", "samples",
-                 "runs_sampled", "limit", "conflicts", "components", "values", "value_runs", "others")
+                 "runs_sampled", "limit", "conflicts", "components", "values", "value_runs", "others",
+                 "failed_here")
 
     def __init__(self, name: str, kind: str, decl: ItemDecl | None, bucketing, components=()) -> None:
         self.name, self.kind, self.decl, self.bucketing = name, kind, decl, bucketing
@@ -80,6 +81,7 @@ class ItemCounts:
         self.values = array("d")           # record items: numeric values …
         self.value_runs = array("q")       # … and the run of each
         self.others: Counter = Counter()   # record items of other types: value counts
+        self.failed_here: defaultdict[Hashable, list[int]] = defaultdict(list)   # runs that failed there
 
     @property
     def numeric_record(self) -> bool:
@@ -237,6 +239,23 @@ class CoverageMerger:
             if targets is None:
                 targets = self._schemas[key] = self._match(group[0].items, group[0].name)
             self._add_samples(targets, group, slot, [base + i for i in members])
+            if slot == 2 or slot == 3:
+                for i in members:
+                    if runs[i].unsampled:
+                        self._add_unsampled(targets, runs[i].unsampled, base + i)
+
+    def _add_unsampled(self, targets: list[ItemCounts | None], unsampled: Sequence[list], run: int) -> None:
+        """Where a failing run was when it failed, for the items whose event never came."""
+        for counts, values in zip(targets, unsampled, strict=False):
+            if counts is None or not values or counts.kind == "record":
+                continue
+            try:
+                keys = counts.bucketing.keys(list(values))
+            except (TypeError, ValueError):
+                continue
+            for key in set(keys):
+                if not _ignored_key(key) and (key in counts.stats or counts._row(key) is not None):
+                    counts.failed_here[key].append(run)
 
     @staticmethod
     def _add_inputs(plan: _InputPlan, slot: int | None, rows: list, rids: list[int]) -> None:

@@ -37,10 +37,22 @@ class BucketResult:
     failing_runs: tuple[int, ...] = ()   # run ids (into CoverageReport.runs) that failed or errored here
     low: float | None = None
     high: float | None = None
+    #: Runs that failed while their value was here, for an item sampled at ``end`` (which a failed run
+    #: never reaches): a bucket with no hit but these is *not sampled*, not a plain hole.
+    failed_here: tuple[int, ...] = ()
 
     @property
     def covered(self) -> bool:
         return self.hits >= self.target
+
+    @property
+    def not_sampled(self) -> bool:
+        """No hit, but failing runs were here when they failed (a failing region, not a hole)."""
+        return self.hits == 0 and bool(self.failed_here)
+
+    def rerun(self) -> tuple[int, ...]:
+        """The runs to rerun for this bucket: its failing runs, else those that failed while here."""
+        return self.failing_runs or self.failed_here
 
     @property
     def runs(self) -> int:
@@ -117,8 +129,18 @@ class ItemResult:
 
     @property
     def holes(self) -> tuple[int, ...]:
-        """Indices of the buckets below their target."""
+        """Indices of the buckets below their target (the grade's misses, not-sampled ones included)."""
         return tuple(i for i, b in enumerate(self.buckets) if not b.covered)
+
+    @property
+    def plain_holes(self) -> tuple[int, ...]:
+        """The holes no run reached, failing or not: where new variants are needed."""
+        return tuple(i for i in self.holes if not self.buckets[i].not_sampled)
+
+    @property
+    def not_sampled(self) -> tuple[int, ...]:
+        """The holes only failing runs reached (their ``end`` never came): failures to fix, not gaps."""
+        return tuple(i for i in self.holes if self.buckets[i].not_sampled)
 
     @property
     def covered_count(self) -> int:

@@ -190,7 +190,7 @@ class _Page:
         return " · ".join(facts)
 
     def chips(self, bucket: BucketResult) -> str:
-        runs = bucket.failing_runs
+        runs = bucket.rerun()
         if not runs:
             return ""
         shown = "".join(self.run_link(r) for r in runs[:MAX_CHIPS])
@@ -206,7 +206,10 @@ class _Page:
         peak = max((b.hits for b in item.buckets), default=0) or 1
         rows = []
         for bucket in item.buckets[:MAX_BUCKET_ROWS]:
-            if bucket.hits == 0 or not bucket.covered:
+            if bucket.not_sampled:
+                bar = (f'<div class="holebar notsampled">not sampled: {len(bucket.failed_here)} failed run(s) '
+                       'were here</div>')
+            elif bucket.hits == 0 or not bucket.covered:
                 text = "hole" if bucket.hits == 0 else f"{bucket.hits} of {item.at_least} hits"
                 bar = f'<div class="holebar">{text}</div>'
             else:
@@ -271,6 +274,10 @@ class _Page:
                 bucket = item.buckets[r * len(columns) + c]
                 tip = escape(f"{row_label} × {columns[c]}: {bucket.hits} hit(s), {bucket.passed} passed, "
                              f"{bucket.failed} failed, {bucket.errored} error")
+                if bucket.not_sampled:
+                    cells.append(f'<td class="hole notsampled" title="{tip}"><span>not sampled</span>'
+                                 f'<span class="r">{len(bucket.failed_here)} failed</span></td>')
+                    continue
                 if bucket.hits == 0:
                     why = (f'<span class="r">{bucket.errored} error</span>' if bucket.errored else "")
                     cells.append(f'<td class="hole" title="{tip}"><span>hole</span>{why}</td>')
@@ -294,12 +301,17 @@ class _Page:
                 '<span>darker = more hits</span><span class="holekey"></span><span>hole</span></div>')
 
     def holes(self, item: ItemResult) -> str:
-        holes = item.holes
-        if not holes:
+        if not item.holes:
             return '<div class="holes muted">No holes: every bucket reached its target.</div>'
-        chips = "".join(f'<span class="hole">{escape(item.buckets[i].label)}</span>' for i in holes[:MAX_HOLES])
-        more = f' <span class="muted">+{len(holes) - MAX_HOLES} more</span>' if len(holes) > MAX_HOLES else ""
-        return f'<div class="holes"><b>Holes ({len(holes)}):</b> {chips}{more}</div>'
+        out = []
+        for title, found, css in (("Holes", item.plain_holes, "hole"),
+                                  ("Not sampled, only failing runs were here", item.not_sampled, "hole notsampled")):
+            if not found:
+                continue
+            chips = "".join(f'<span class="{css}">{escape(item.buckets[i].label)}</span>' for i in found[:MAX_HOLES])
+            more = f' <span class="muted">+{len(found) - MAX_HOLES} more</span>' if len(found) > MAX_HOLES else ""
+            out.append(f'<div class="holes"><b>{title} ({len(found)}):</b> {chips}{more}</div>')
+        return "".join(out)
 
     def item_card(self, index: int, item: ItemResult) -> str:
         grade = (f'<span class="grade" style="color:{_grade_colour(item.grade)}">{_pct(item.grade)}'

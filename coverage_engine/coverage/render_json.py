@@ -22,6 +22,8 @@ def _bucket(bucket: BucketResult, names: tuple[str, ...]) -> dict[str, Any]:
     out.update(hits=bucket.hits, passed=bucket.passed, failed=bucket.failed, errored=bucket.errored,
                pass_rate=_percent(bucket.pass_rate), covered=bucket.covered,
                failing_runs=[names[i] for i in bucket.failing_runs])
+    if bucket.failed_here:
+        out["failed_here"] = [names[i] for i in bucket.failed_here]
     return out
 
 
@@ -34,7 +36,8 @@ def _item(item: ItemResult, names: tuple[str, ...]) -> dict[str, Any]:
         "samples": item.samples, "runs_sampled": item.runs_sampled, "ignored": item.ignored,
         "notes": list(item.notes),
         "buckets": [_bucket(b, names) for b in item.buckets],
-        "holes": [item.buckets[i].label for i in item.holes],
+        "holes": [item.buckets[i].label for i in item.plain_holes],
+        "not_sampled": [item.buckets[i].label for i in item.not_sampled],
     }
     if item.cross is not None:
         out["cross"] = {"axes": list(item.cross.axes), "labels": [list(axis) for axis in item.cross.labels]}

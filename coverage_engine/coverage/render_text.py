@@ -59,7 +59,7 @@ class _Style:
 
 
 def _names(bucket: BucketResult, names: tuple[str, ...]) -> str:
-    runs = bucket.failing_runs
+    runs = bucket.rerun()
     shown = ", ".join(names[i] for i in runs[:MAX_NAMES])
     return shown + (f" +{len(runs) - MAX_NAMES} more" if len(runs) > MAX_NAMES else "")
 
@@ -147,6 +147,8 @@ def _bucket_table(item: ItemResult, names: tuple[str, ...], style: _Style) -> Ta
             rate = bucket.pass_rate
             colour = "green" if rate is None or rate >= 99.5 else "yellow" if rate >= 50 else "red"
             bar = style.bar(bucket.hits / peak, 16, colour)
+        elif bucket.not_sampled:
+            bar = style.styled(f"not sampled: {len(bucket.failed_here)} failed run(s) were here", "bold yellow")
         else:
             bar = style.styled("hole" if bucket.hits == 0 else f"below {item.at_least}", "bold red")
         table.add_row(bucket.label, str(bucket.hits), str(bucket.runs), percent(bucket.pass_rate), bar,
@@ -172,6 +174,9 @@ def _grid(item: ItemResult, style: _Style) -> tuple[Text, Table] | None:
         cells: list = [label]
         for c in range(len(columns)):
             bucket = item.buckets[r * len(columns) + c]
+            if bucket.not_sampled:
+                cells.append(style.styled(f"{len(bucket.failed_here)} failed", "yellow"))
+                continue
             if bucket.hits == 0:
                 cells.append(style.styled("·" if not style.plain else ".", "red"))
                 continue
@@ -219,12 +224,17 @@ def _scatter(item: ItemResult, style: _Style) -> list[Text] | None:
 
 
 def _holes(item: ItemResult, style: _Style) -> Text | None:
-    holes = item.holes
-    if not holes or not item.graded:
+    if not item.holes or not item.graded:
         return None
-    labels = [item.buckets[i].label for i in holes[:MAX_HOLES]]
-    more = f" +{len(holes) - MAX_HOLES} more" if len(holes) > MAX_HOLES else ""
-    return style.styled(f"  holes ({len(holes)}): " + ", ".join(labels) + more, "red")
+    text = Text()
+    for title, found, colour in (("holes", item.plain_holes, "red"),
+                                 ("not sampled, only failing runs were here", item.not_sampled, "yellow")):
+        if found:
+            labels = [item.buckets[i].label for i in found[:MAX_HOLES]]
+            more = f" +{len(found) - MAX_HOLES} more" if len(found) > MAX_HOLES else ""
+            text.append(("\n" if text else "") + f"  {title} ({len(found)}): " + ", ".join(labels) + more,
+                        style="" if style.plain else colour)
+    return text
 
 
 def _records(report: CoverageReport, style: _Style) -> Table | None:

@@ -134,7 +134,7 @@ class _Reader:
             name=name, verdict=verdict, reason=reason, folder=str(folder) if folder is not None else None,
             log=str(log) if log is not None else None, assignment=assignment,
             items=coverage.items if coverage else (), samples=coverage.samples if coverage else (),
-            ignored=coverage.ignored if coverage else ())
+            ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else ())
 
 
 def _job_folders(root: Path, reader: _Reader) -> dict[str, Path]:

@@ -105,7 +105,8 @@ def run_coverage_dict(run: RunCoverage) -> dict[str, Any]:
             run_doc[key] = value
     run_doc["assignment"] = dict(info.assignment)
     items = []
-    for decl, values, dropped in zip(run.items, run.samples, run.ignored, strict=True):
+    unsampled = run.unsampled or tuple([] for _ in run.items)
+    for decl, values, dropped, missed in zip(run.items, run.samples, run.ignored, unsampled, strict=True):
         item: dict[str, Any] = {"name": decl.name, "kind": decl.kind, "path": decl.path}
         if decl.is_cross:
             item["items"] = list(decl.items)
@@ -128,6 +129,8 @@ def run_coverage_dict(run: RunCoverage) -> dict[str, Any]:
         if dropped:
             item["ignored"] = dropped
         item["samples"] = values
+        if missed:
+            item["unsampled"] = missed
         items.append(item)
     return {"format": FORMAT, "format_version": FORMAT_VERSION, "run": run_doc, "items": items}
 
@@ -163,13 +166,14 @@ def write_run_coverage(target: str | os.PathLike[str], run: RunCoverage) -> Path
 class ItemSamples:
     """The samples of one item during a run: ``add(value)`` appends, ``drop()`` counts one ``ignore``d."""
 
-    __slots__ = ("decl", "values", "ignored", "add")
+    __slots__ = ("decl", "values", "ignored", "add", "unsampled")
 
     def __init__(self, decl: ItemDecl) -> None:
         self.decl = decl
         self.values: list = []
         self.ignored = 0
         self.add = self.values.append
+        self.unsampled: list = []      # values at a failure, for an item whose event never came
 
     def drop(self) -> None:
         """A sample the item's ``ignore:`` condition matched (kept out of the buckets, but counted)."""
@@ -217,8 +221,9 @@ class RunCoverageBuilder:
 
         Non-finite float samples (``nan``, ``inf``) cannot be JSON values: they are counted as ignored.
         """
-        samples, ignored = [], []
+        samples, ignored, unsampled = [], [], []
         for sampler in self._items:
+            unsampled.append([v for v in sampler.unsampled if not (isinstance(v, float) and not math.isfinite(v))])
             values, dropped = sampler.values, sampler.ignored
             vt = sampler.decl.value_type
             if vt is not None and vt.kind == "float":
@@ -230,7 +235,8 @@ class RunCoverageBuilder:
         run = RunCoverage(
             run=RunInfo(scenario=self.scenario, verdict=verdict, source=self.source, variant=self.variant,
                         assignment=self.assignment, reason=reason, started=started, duration=duration),
-            items=tuple(s.decl for s in self._items), samples=tuple(samples), ignored=tuple(ignored))
+            items=tuple(s.decl for s in self._items), samples=tuple(samples), ignored=tuple(ignored),
+            unsampled=tuple(unsampled) if any(unsampled) else ())
         try:
             return validate(run_coverage_dict(run))
         except Invalid as exc:

@@ -82,3 +82,6 @@ class RunCoverage:
     items: tuple[ItemDecl, ...]
     samples: tuple[list, ...]
     ignored: tuple[int, ...]
+    #: Per item, the values an ``end`` item had when the run failed (its ``end`` never came): not samples,
+    #: but where the failing run was; empty when no item has any.
+    unsampled: tuple[list, ...] = ()

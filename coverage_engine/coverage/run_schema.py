@@ -73,7 +73,7 @@ def _unknown_keys(data: dict, allowed: set[str], path: tuple) -> None:
 
 _RUN_KEYS = {"scenario", "verdict", "source", "variant", "assignment", "reason", "started", "duration"}
 _ITEM_KEYS = {"name", "kind", "path", "type", "members", "unit", "range", "every", "event", "text", "ignore",
-              "items", "samples", "ignored"}
+              "items", "samples", "ignored", "unsampled"}
 
 
 def _run_info(data: object) -> RunInfo:
@@ -150,7 +150,7 @@ def _range(item: dict, value_type: ValueType, p: tuple) -> tuple[tuple[float, fl
     return (low, high), every
 
 
-def _item(data: object, index: int) -> tuple[ItemDecl, list, int]:
+def _item(data: object, index: int) -> tuple[ItemDecl, list, int, list]:
     p: tuple = ("items", index)
     item = _obj(data, p, "an item")
     _unknown_keys(item, _ITEM_KEYS, p)
@@ -182,6 +182,11 @@ def _item(data: object, index: int) -> tuple[ItemDecl, list, int]:
         raise Invalid((*p, "samples"), "must be a list")
     if len(samples) > MAX_SAMPLES_PER_ITEM:
         raise Invalid((*p, "samples"), f"more than {MAX_SAMPLES_PER_ITEM} samples")
+    unsampled = item.get("unsampled", [])
+    if not isinstance(unsampled, list):
+        raise Invalid((*p, "unsampled"), "must be a list")
+    if len(unsampled) > MAX_SAMPLES_PER_ITEM:
+        raise Invalid((*p, "unsampled"), f"more than {MAX_SAMPLES_PER_ITEM} values")
     ignored = item.get("ignored", 0)
     if type(ignored) is not int or ignored < 0:
         raise Invalid((*p, "ignored"), "must be a whole number of samples, 0 or more")
@@ -192,10 +197,10 @@ def _item(data: object, index: int) -> tuple[ItemDecl, list, int]:
         text=_str(item.get("text"), (*p, "text"), optional=True),
         ignore=_str(item.get("ignore"), (*p, "ignore"), optional=True),
         items=tuple(components or ()))
-    return decl, samples, ignored
+    return decl, samples, ignored, unsampled
 
 
-def _check_samples(decls: list[ItemDecl], samples: list[list]) -> None:
+def _check_samples(decls: list[ItemDecl], samples: list[list], key: str = "samples") -> None:
     by_name = {(d.path, d.name): d for d in decls}
     for index, (decl, values) in enumerate(zip(decls, samples, strict=True)):
         p = ("items", index)
@@ -210,10 +215,10 @@ def _check_samples(decls: list[ItemDecl], samples: list[list]) -> None:
                 types.append(target.value_type)
             for s, value in enumerate(values):
                 if not isinstance(value, list) or len(value) != len(types):
-                    raise Invalid((*p, "samples", s), f"a sample of this cross is a list of {len(types)} values")
+                    raise Invalid((*p, key, s), f"a sample of this cross is a list of {len(types)} values")
                 for c, (part, vt) in enumerate(zip(value, types, strict=True)):
                     if not vt.accepts(part):
-                        raise Invalid((*p, "samples", s, c), f"{part!r} is not a {vt.describe()} value")
+                        raise Invalid((*p, key, s, c), f"{part!r} is not a {vt.describe()} value")
             continue
         value_type = decl.value_type
         if value_type is None:   # only a cross has none, and crosses were checked above
@@ -221,7 +226,7 @@ def _check_samples(decls: list[ItemDecl], samples: list[list]) -> None:
         accepts = value_type.accepts
         for s, value in enumerate(values):
             if not accepts(value):
-                raise Invalid((*p, "samples", s), f"{value!r} is not a {value_type.describe()} value")
+                raise Invalid((*p, key, s), f"{value!r} is not a {value_type.describe()} value")
 
 
 def validate(doc: object) -> RunCoverage:
@@ -241,10 +246,10 @@ def validate(doc: object) -> RunCoverage:
         raise Invalid(("items",), "must be a list")
     if len(items) > MAX_ITEMS:
         raise Invalid(("items",), f"more than {MAX_ITEMS} items")
-    decls, samples, ignored = [], [], []
+    decls, samples, ignored, unsampled = [], [], [], []
     seen: dict[str, int] = {}
     for index, data in enumerate(items):
-        decl, values, dropped = _item(data, index)
+        decl, values, dropped, missed = _item(data, index)
         if decl.full_name in seen:
             raise Invalid(("items", index, "name"),
                            f"item '{decl.full_name}' is declared twice (first as items[{seen[decl.full_name]}])")
@@ -252,5 +257,8 @@ def validate(doc: object) -> RunCoverage:
         decls.append(decl)
         samples.append(values)
         ignored.append(dropped)
+        unsampled.append(missed)
     _check_samples(decls, samples)
-    return RunCoverage(run=run, items=tuple(decls), samples=tuple(samples), ignored=tuple(ignored))
+    _check_samples(decls, unsampled, "unsampled")
+    return RunCoverage(run=run, items=tuple(decls), samples=tuple(samples), ignored=tuple(ignored),
+                       unsampled=tuple(unsampled) if any(unsampled) else ())

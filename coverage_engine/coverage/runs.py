@@ -42,6 +42,8 @@ class RunInput:
     single: Sequence | None = None
     parameters: tuple[str, ...] | None = None
     values: Sequence | None = None
+    #: Per item, values of ``end`` items at a failure (see ``RunCoverage.unsampled``); usually empty.
+    unsampled: Sequence[list] = ()
 
 
 @dataclass

@@ -2,8 +2,8 @@
 
 When an item is sampled is its event's business:
 
-- ``end`` (the default): once, when the scenario ends *and passed* — a failed run's end-items are lost,
-  as the specification says of the ``end`` event;
+- ``end`` (the default): once, when the scenario ends *and passed* — a failed run has no ``end`` event,
+  as the specification says; its end-items' values at the failure are kept apart as ``unsampled``;
 - ``finish`` (our name for it, as in Foretify): once at the end of every run, passed or failed, so the
   KPIs of failing runs are kept;
 - a scenario event: each time the scenario emits it.
@@ -69,10 +69,29 @@ class CoverageSampler:
             self._sample(item, samples)
 
     def finish(self, passed: bool) -> None:
-        """The run ended: sample the ``end`` items if it passed, the ``finish`` items in any case."""
+        """The run ended: sample the ``end`` items if it passed, the ``finish`` items in any case.
+
+        A failed run's ``end`` never comes; its ``end`` items keep the values they had at the failure as
+        *unsampled* (not samples: the report shows where failing runs were instead of calling it a hole).
+        """
         if passed:
             self.on_event("end")
+        else:
+            for item, samples in self._by_event.get("end", ()):
+                self._note_failure(item, samples)
         self.on_event("finish")
+
+    def _note_failure(self, item: CoverageItem, samples: ItemSamples) -> None:
+        try:
+            if item.ignore is not None and evaluate(item.ignore, self.variables) is True:
+                return
+            if item.items:
+                value: object = [self._value(part) for part in self._parts[item.name]]
+            else:
+                value = self._value(item)
+        except Exception:  # noqa: BLE001 - a value that cannot be read at the failure is simply not noted
+            return
+        samples.unsampled.append(value)
 
     def _sample(self, item: CoverageItem, samples: ItemSamples) -> None:
         if item.ignore is not None and evaluate(item.ignore, self.variables) is True:

@@ -15,8 +15,11 @@
 
 from __future__ import annotations
 
+import functools
 import math
+import re
 from collections.abc import Hashable, Iterable, Sequence
+from importlib import resources
 
 from coverage_engine.coverage.buckets import Bucket, DistinctBuckets, format_number, value_label
 from coverage_engine.files.sce_domains import InputDomain, numeric_value, unit_of
@@ -87,9 +90,35 @@ def range_axis(domain: InputDomain, every: float | None = None) -> RangeAxis:
     return RangeAxis(domain.low, domain.high, width, domain.unit)
 
 
+_UNIT_LINE = re.compile(r"^unit\s+(\w+)\s+of\s+\w+\s+is\s+SI\(([^)]*)\)", re.MULTILINE)
+_FACTOR = re.compile(r"\bfactor:\s*([-+0-9.eE]+)")
+_OFFSET = re.compile(r"\boffset:\s*([-+0-9.eE]+)")
+
+
+@functools.cache
+def unit_scales() -> dict[str, tuple[float, float]]:
+    """``unit -> (factor, offset)`` of the standard library's units (``types.osc``): a value in SI is
+    ``number * factor + offset``. Read from the library's text, so the two never disagree."""
+    text = resources.files("coverage_engine.osc").joinpath("types.osc").read_text(encoding="utf-8")
+    scales = {}
+    for name, body in _UNIT_LINE.findall(text):
+        factor, offset = _FACTOR.search(body), _OFFSET.search(body)
+        scales[name] = (float(factor.group(1)) if factor else 1.0, float(offset.group(1)) if offset else 0.0)
+    return scales
+
+
+def _si(value: Hashable) -> float | None:
+    number = numeric_value(value)
+    if number is None:
+        return None
+    factor, offset = unit_scales().get(unit_of(value), (1.0, 0.0))
+    return number * factor + offset
+
+
 def numeric_order(values: Sequence[Hashable]) -> list[Hashable] | None:
-    """``values`` in numeric order when every one is a number, with or without a unit; else None."""
-    numbers = [numeric_value(v) for v in values]
+    """``values`` in numeric order when every one is a number, with or without a unit (``500ms`` before
+    ``1s``: units of the standard library compare in SI); else None."""
+    numbers = [_si(v) for v in values]
     if not values or any(n is None for n in numbers):
         return None
     order = sorted(range(len(values)), key=lambda i: numbers[i])   # type: ignore[arg-type, return-value]

@@ -16,7 +16,6 @@ from array import array
 from collections.abc import Hashable, Mapping
 from itertools import islice
 
-from coverage_engine.coverage.buckets import value_label
 from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.merge import INPUT_PREFIX, CoverageMerger, ItemCounts
 from coverage_engine.coverage.model import (
@@ -32,7 +31,7 @@ from coverage_engine.coverage.model import (
 )
 from coverage_engine.coverage.plan import CoveragePlan
 from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
-from coverage_engine.files.sce_domains import InputDomain, drawn_text
+from coverage_engine.files.sce_domains import InputDomain
 
 #: Most cells a cross may have to be graded and drawn.
 MAX_CROSS_CELLS = 10_000
@@ -265,19 +264,6 @@ def overall_grade(items: list[ItemResult]) -> float | None:
     return sum(grade * weight for grade, weight in graded) / total
 
 
-def _values_text(values: Mapping[str, object], domains: Mapping[str, InputDomain]) -> str:
-    """A run's varied values on one line, keys without their scenario, drawn numbers rounded with their unit."""
-    parts = []
-    for key, value in values.items():
-        domain = domains.get(key)
-        if domain is not None and domain.drawn and isinstance(value, float):
-            shown = drawn_text(value, domain.unit)
-        else:
-            shown = value_label(value)
-        parts.append(f"{key.split('.', 1)[-1]}={shown}")
-    return ", ".join(parts)
-
-
 def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: str = "", complete: bool = True,
           notes: list[str] | None = None, root: str | None = None,
           warnings: list[str] | None = None, domains: Mapping[str, InputDomain] | None = None) -> CoverageReport:
@@ -298,7 +284,8 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
     runs = RunTable(names=tuple(merger.run_names), verdicts=tuple(merger.run_verdicts),
                     reasons=tuple(merger.run_reasons), folders=tuple(merger.run_folders),
                     logs=tuple(merger.run_logs),
-                    values={rid: _values_text(v, domains) for rid, v in merger.failing_values.items() if v})
+                    values=merger.failing_values,
+                    drawn_units={key: d.unit for key, d in domains.items() if d.drawn})
     return CoverageReport(source=source, complete=complete, runs=runs, verdict_counts=verdicts,
                           items=tuple(items), grade=overall_grade(items), notes=tuple(notes or ()),
                           warnings=tuple(warnings), plan_file=plan.file, root=root)

@@ -6,8 +6,12 @@ only read it (the way coverage.py's reports read its ``Analysis``). Grades are p
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
+
+from coverage_engine.coverage.buckets import value_label
+from coverage_engine.files.sce_domains import drawn_text
 
 #: Most runs a scatter shows.
 MAX_POINTS = 5_000
@@ -160,16 +164,33 @@ class RunTable:
     reasons: tuple[str | None, ...]
     folders: tuple[str | None, ...]
     logs: tuple[str | None, ...]
-    #: The varied values of each failing run, as one short text (``speed=84.27kph, weather=dry``), by run id.
-    values: dict[int, str] = field(default_factory=dict)
+    #: The varied values of each failing run, by run id (spelled by :meth:`values_text`).
+    values: dict[int, dict[str, object]] = field(default_factory=dict)
+    #: The unit of each parameter a sampler drew (its values are shown rounded, with the unit).
+    drawn_units: dict[str, str] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.names)
 
+    @functools.cached_property
+    def _failing(self) -> tuple[int, ...]:
+        ids = [i for i, v in enumerate(self.verdicts) if v in ("failed", "error")]
+        return tuple(sorted(ids, key=lambda i: [int(p) if p.isdigit() else p
+                                                for p in re.split(r"(\d+)", self.names[i])]))
+
     def failing(self) -> list[int]:
         """Ids of the runs that failed or errored, in the natural order of their names (``x2`` before ``x10``)."""
-        ids = [i for i, v in enumerate(self.verdicts) if v in ("failed", "error")]
-        return sorted(ids, key=lambda i: [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", self.names[i])])
+        return list(self._failing)
+
+    def values_text(self, run: int) -> str:
+        """A failing run's varied values on one line (``speed=84.27kph, road=dry``): keys without their
+        scenario, drawn numbers rounded to 4 significant digits with their unit; "" when it has none."""
+        parts = []
+        for key, value in self.values.get(run, {}).items():
+            unit = self.drawn_units.get(key)
+            shown = drawn_text(value, unit) if unit is not None and isinstance(value, float) else value_label(value)
+            parts.append(f"{key.split('.', 1)[-1]}={shown}")
+        return ", ".join(parts)
 
 
 @dataclass(frozen=True)

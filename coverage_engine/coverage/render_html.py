@@ -396,7 +396,7 @@ class _Page:
                 reason = escape((runs.reasons[i] or "").strip().splitlines()[0] if runs.reasons[i] else "")
                 out.append(f'<tr><td class="mono">{escape(runs.names[i])}</td>'
                            f'<td><span class="verdict {escape(runs.verdicts[i])}">{escape(runs.verdicts[i])}</span></td>'
-                           f'<td class="mono">{escape(runs.values.get(i, ""))}</td>'
+                           f'<td class="mono">{escape(runs.values_text(i))}</td>'
                            f'<td class="reason" title="{reason}">{reason}</td><td>{links}</td></tr>')
             return "".join(out)
 

@@ -268,7 +268,7 @@ def _failing(report: CoverageReport, style: _Style) -> Table | None:
         table.add_column(column)
     for i in failing[:MAX_FAILING_RUNS]:
         reason = (runs.reasons[i] or "").splitlines()[0][:MAX_REASON_CHARS] if runs.reasons[i] else ""
-        table.add_row(runs.names[i], style.styled(runs.verdicts[i], "red"), runs.values.get(i, ""), reason,
+        table.add_row(runs.names[i], style.styled(runs.verdicts[i], "red"), runs.values_text(i), reason,
                       runs.logs[i] or runs.folders[i] or "")
     if len(failing) > MAX_FAILING_RUNS:
         table.add_row(f"… {len(failing) - MAX_FAILING_RUNS} more", "", "", "", "")
@@ -280,8 +280,8 @@ def plain_width(report: CoverageReport) -> int:
     wrapped, as there is no terminal width to fit (at least 120)."""
     longest = max((len(item.name) for item in report.items), default=0)
     runs = report.runs
-    failing = max((len(runs.names[i]) + len(runs.values.get(i, "")) + min(len((runs.reasons[i] or "").split("\n")[0]),
-                   MAX_REASON_CHARS) + len(runs.logs[i] or runs.folders[i] or "") for i in runs.failing()),
+    failing = max((len(runs.names[i]) + len(runs.values_text(i)) + min(len((runs.reasons[i] or "").split("\n")[0]),
+                   MAX_REASON_CHARS) + len(runs.logs[i] or runs.folders[i] or "") for i in runs.failing()[:MAX_FAILING_RUNS]),
                   default=0)
     return max(120, longest + 100, failing + 30)
 

@@ -9,6 +9,7 @@ reached is *not sampled*, not a hole; several results folders and a folder of sh
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -170,3 +171,16 @@ def test_a_shard_still_running_makes_the_merged_report_incomplete(tmp_path):
     done = coverage("report", "results", cwd=tmp_path)
     assert "INCOMPLETE" in done.stdout and "[complete]" not in done.stdout
     assert "results/shard-2: 1 job folder(s) are not in the merged report yet" in done.stdout
+
+
+def test_one_failing_runs_folder_in_a_pipe_has_its_record_and_failure(tmp_path):
+    """The crash that went unnoticed: a single run's folder with a failing run and a record() item."""
+    text = GAP.replace("    do serial:", "    record(gap_kept, expression: gap, unit: m, event: finish)\n    do serial:")
+    (tmp_path / "gap.osc").write_text(text.replace("keep(it in [2m, 4m, 6m, 8m])", "keep(it == 2m)"),
+                                      encoding="utf-8")
+    run(str(BIN / "scenario_execution"), "gap.osc", "-o", "r1", cwd=tmp_path)
+    done = coverage("report", "r1", cwd=tmp_path)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    blocks = [b.splitlines()[0] for b in done.stdout.split("\n\n") if b.strip()]
+    assert blocks[-2:] == ["Record items", "Failing runs (1)"], blocks
+    assert re.search(r"^ gap_test\.gap_kept +m +1 +2 +r1 +2 +2 +r1$", done.stdout, re.MULTILINE), done.stdout

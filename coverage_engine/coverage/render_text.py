@@ -293,6 +293,7 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
     console.print()
     if any(i.graded for i in report.items):
         console.print(_overview(report, style))
+        console.print()
     names = report.runs.names
     for item in report.items:
         if item.kind == "record":

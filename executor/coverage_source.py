@@ -17,7 +17,7 @@ from collections.abc import Iterator
 from coverage_engine.coverage.errors import RunFileError
 from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import header_domains
+from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
 from store.queue import QueueStore
@@ -151,7 +151,7 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
         queue.close()
     records = CoverageRecords.open_existing(url)
     source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
-    for header in records.variant_headers(batch.id):
+    for header in records.variant_headers(batch.id, HEADER_CHARS):
         source.declare(header_domains(header))
     source.runs = iter(_StoreRuns(records, batch.id, source))
     return source

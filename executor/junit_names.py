@@ -16,6 +16,7 @@ GitHub show nothing else (no suite properties). So:
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Mapping
@@ -53,8 +54,10 @@ def _value_text(value: object) -> str:
     return " ".join(text.split()) if any(c.isspace() and c != " " for c in text) else text
 
 
+@functools.lru_cache(maxsize=64)
 def drawn_units(header: str) -> dict[str, str]:
-    """The unit of each parameter a sampler drew, from the ``# domain`` lines of a ``.sce`` header."""
+    """The unit of each parameter a sampler drew, from the ``# domain`` lines of a ``.sce`` header (the
+    variants of one variation share their header: read once, not once per job). Do not change the result."""
     return {d.key: d.unit for d in header_domains(header) if d.drawn}
 
 

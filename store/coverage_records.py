@@ -246,7 +246,7 @@ class CoverageRecords:
         declarations = json.loads(self.declarations([row[0]])[row[0]])
         return join_document(declarations, json.loads(row[1]), json.loads(row[2]), format_name, format_version)
 
-    def variant_headers(self, batch_id: int, chars: int = 65536) -> list[str]:
+    def variant_headers(self, batch_id: int, chars: int) -> list[str]:
         """The start of one ``.sce`` text per variation run whose variants the batch ran (their headers
         say what each variation declared); [] for a store without variation records."""
         try:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from sqlalchemy import Engine, MetaData, Table, func, inspect, literal, select
@@ -18,8 +18,6 @@ from sqlalchemy.exc import SQLAlchemyError
 
 _CHUNK = 500
 
-#: How much of a variant's ``.sce`` text is read for its header.
-HEADER_CHARS = 4096
 
 
 @dataclass(frozen=True)
@@ -43,8 +41,21 @@ def _candidates(path: str) -> set[str]:
     return names
 
 
-def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo]:
-    """Map each of ``paths`` that is a known variant to what the store says of it (empty without a ``variants`` table)."""
+def _headers(conn: Any, table: Table, run_ids: set[int], chars: int) -> dict[int, str]:
+    """The start of one ``.sce`` text per variation run (the variants of a run share their header's
+    declarations), read once per run rather than once per variant."""
+    if not run_ids or "run_id" not in table.c or "sce_text" not in table.c:
+        return {}
+    firsts = select(func.min(table.c.id)).where(table.c.run_id.in_(sorted(run_ids))).group_by(table.c.run_id)
+    stmt = select(table.c.run_id, func.substr(table.c.sce_text, 1, chars)).where(table.c.id.in_(firsts))
+    return {row[0]: row[1] or "" for row in conn.execute(stmt)}
+
+
+def variant_infos(engine: Engine, paths: Iterable[str], header_chars: int = 0) -> dict[str, VariantInfo]:
+    """Map each of ``paths`` that is a known variant to what the store says of it (empty without a ``variants`` table).
+
+    ``header_chars`` > 0 also gives each variant the start of its variation's ``.sce`` header (one string
+    shared by the variants of a variation run)."""
     wanted: dict[str, str] = {}
     for path in paths:
         for name in _candidates(path):
@@ -61,18 +72,19 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
             return {}
         columns: list[Any] = [table.c.file_path, table.c.assignment]
         columns.append(table.c.scenario if "scenario" in table.c else table.c.file_path.label("no_scenario"))
-        head = func.substr(table.c.sce_text, 1, HEADER_CHARS) if "sce_text" in table.c else literal("")
+        run_column = table.c.run_id if "run_id" in table.c else literal(None)
         joined: Any = table
         if "source_id" in table.c and inspector.has_table("source_files"):
             sources = Table("source_files", metadata, autoload_with=engine)
             joined = table.outerjoin(sources, table.c.source_id == sources.c.id)
             columns.append(sources.c.path.label("source_path"))
         found: dict[str, VariantInfo] = {}
+        runs: dict[str, int] = {}
         names = sorted(wanted)
         with engine.connect() as conn:
             for start in range(0, len(names), _CHUNK):
                 chunk = names[start:start + _CHUNK]
-                stmt = select(*columns, head.label("header")).select_from(joined).where(table.c.file_path.in_(chunk))
+                stmt = select(*columns, run_column.label("run")).select_from(joined).where(table.c.file_path.in_(chunk))
                 if "id" in table.c:
                     stmt = stmt.order_by(table.c.id)       # the newest row for a path wins
                 for row in conn.execute(stmt):
@@ -81,7 +93,12 @@ def variant_infos(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo
                         continue
                     scenario = row[2] if "scenario" in table.c else None
                     source = row[3] if len(row) > 4 else None
-                    found[wanted[row[0]]] = VariantInfo(value, scenario, source, row[-1] or "")
+                    found[wanted[row[0]]] = VariantInfo(value, scenario, source)
+                    if row[-1] is not None:
+                        runs[wanted[row[0]]] = row[-1]
+            headers = _headers(conn, table, set(runs.values()), header_chars) if header_chars > 0 else {}
+        if headers:
+            found = {path: replace(info, header=headers.get(runs.get(path, -1), "")) for path, info in found.items()}
         return found
     except (SQLAlchemyError, ValueError):
         return {}

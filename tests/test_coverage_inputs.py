@@ -128,8 +128,9 @@ def test_every_of_a_cover_sets_the_width_of_a_drawn_parameter(tmp_path):
     _vary(tmp_path, "drive", text, "--strategy", "random", "--samples", "8", "--seed", "2")
     _batch(tmp_path, "out", "results")
     speed = _items(tmp_path, "results")["input:drive.speed"]
-    assert [b["label"] for b in speed["buckets"]] == ["[0 kph..25 kph)", "[25 kph..50 kph)", "[50 kph..75 kph)",
-                                                      "[75 kph..100 kph)", "[100 kph..125 kph]"]
+    # Inner edges every 25 kph; the first and last buckets end at the declared 20 and 120 kph.
+    assert [b["label"] for b in speed["buckets"]] == ["[20 kph..25 kph)", "[25 kph..50 kph)", "[50 kph..75 kph)",
+                                                      "[75 kph..100 kph)", "[100 kph..120 kph]"]
 
 
 def test_a_bucket_only_failing_runs_reached_is_not_sampled(tmp_path):
@@ -144,6 +145,9 @@ def test_a_bucket_only_failing_runs_reached_is_not_sampled(tmp_path):
     assert "  not sampled, only failing runs were here (2): [2..4), [4..6)" in lines
     coverage_file = json.loads((tmp_path / "results" / "gap1" / "coverage.json").read_text(encoding="utf-8"))
     assert coverage_file["items"][0]["samples"] == [] and coverage_file["items"][0]["unsampled"] == [4.0]
+    assert coverage_file["format_version"] == 2          # an older reader refuses it by its version
+    passed = json.loads((tmp_path / "results" / "gap3" / "coverage.json").read_text(encoding="utf-8"))
+    assert passed["format_version"] == 1 and "unsampled" not in passed["items"][0]
 
 
 @pytest.mark.parametrize("layout", ["folders", "shards"])
@@ -184,3 +188,22 @@ def test_one_failing_runs_folder_in_a_pipe_has_its_record_and_failure(tmp_path):
     blocks = [b.splitlines()[0] for b in done.stdout.split("\n\n") if b.strip()]
     assert blocks[-2:] == ["Record items", "Failing runs (1)"], blocks
     assert re.search(r"^ gap_test\.gap_kept +m +1 +2 +r1 +2 +2 +r1$", done.stdout, re.MULTILINE), done.stdout
+
+
+def test_a_shard_that_never_finished_is_named_and_the_merge_is_incomplete(tmp_path):
+    _vary(tmp_path, "lanes", LANES)
+    for shard in (1, 2):
+        _batch(tmp_path, "out", f"results/shard-{shard}", "--shard", f"{shard}/2")
+    (tmp_path / "results" / "shard-2" / "test.xml").unlink()      # stopped before it wrote its report
+    done = coverage("report", "results", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0] == "Scenario coverage of results: 6 run(s) (6 passed)"
+    assert "INCOMPLETE" in done.stdout
+    assert "results/shard-2: no merged test.xml yet" in done.stdout
+
+
+def test_a_folder_named_twice_is_counted_once(tmp_path):
+    _vary(tmp_path, "lanes", LANES)
+    _batch(tmp_path, "out", "results")
+    done = coverage("report", "results", "./results", cwd=tmp_path)
+    assert done.stdout.splitlines()[0] == "Scenario coverage of results: 6 run(s) (6 passed)  [complete]"

@@ -119,7 +119,7 @@ def test_the_plain_report_in_a_pipe_is_the_golden_text(braking):
     assert "warning: the plan names 'brake.no_such_item', which matches no item" in text
     assert "ignore: speed > 110kph" in text and "1 failed" in text          # a failing region of the cross
     assert "speed ↓  road →" in text and "12 run(s); speed ↓  reaction →" in text
-    assert "[0 kph..25 kph)" in text and "10ms" in text
+    assert "[20 kph..25 kph)" in text and "10ms" in text
     assert re.search(r"brake7 +error +speed=33.05kph, reaction=2.452s, road=road_kind!icy, hold=60s +"
                      r"timed out after 3 s", text)
 
@@ -181,8 +181,9 @@ def test_the_json_report_is_the_golden_document(braking):
     assert {p["verdict"] for p in cross["points"]} == {"passed", "failed", "error"}
     assert items["brake.speed_x_road"]["not_sampled"] == ["[50..75) × wet", "[100..125) × dry"]
     assert items["input:brake.hold"]["holes"] == ["60s"]
-    assert [r["values"] for r in document["failing_runs"]][0] == \
-        "speed=113.5kph, reaction=2.26s, road=road_kind!dry, hold=10ms"
+    first = document["failing_runs"][0]["values"]            # exact, as the variant's assignment has them
+    assert first["brake.road"] == "road_kind!dry" and first["brake.hold"] == "10ms"
+    assert abs(first["brake.speed"] - 113.5) < 0.05 and len(repr(first["brake.speed"])) > 8
 
 
 CHROMIUM = os.environ.get("SCENARIO_CHROMIUM", "/usr/bin/chromium")

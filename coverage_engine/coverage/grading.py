@@ -16,6 +16,7 @@ from array import array
 from collections.abc import Hashable, Mapping
 from itertools import islice
 
+from coverage_engine.coverage.buckets import Bucket
 from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.merge import INPUT_PREFIX, CoverageMerger, ItemCounts
 from coverage_engine.coverage.model import (
@@ -49,10 +50,15 @@ def natural_key(name: str) -> list:
 
 
 class _Buckets:
-    """Builds :class:`BucketResult` records; failing runs are listed in natural order of their names."""
+    """Builds :class:`BucketResult` records; failing runs are listed in natural order of their names.
 
-    def __init__(self, names: list[str], verdicts: list[str]) -> None:
+    ``declared``: per varied parameter, what its variation declared and the ``every`` of a ``cover()`` of
+    it in the same unit (:func:`declarations`), from which its buckets are made."""
+
+    def __init__(self, names: list[str], verdicts: list[str],
+                 declared: Mapping[str, tuple[InputDomain, float | None]] | None = None) -> None:
         self.names = names
+        self.declared = declared or {}
         failing = [i for i, v in enumerate(verdicts) if v in ("failed", "error")]
         failing.sort(key=lambda i: natural_key(names[i]))
         self.rank = array("q", range(len(names)))    # runs that did not fail keep their own order
@@ -65,15 +71,30 @@ class _Buckets:
             return tuple(unique)
         return tuple(sorted(unique, key=self.rank.__getitem__))
 
-    def make(self, label: str, stats: list[int], failing: list[int], target: int, low=None, high=None,
-             failed_here: list[int] | None = None) -> BucketResult:
+    def domain_of(self, counts: ItemCounts) -> InputDomain | None:
+        """What the variation declared for a varied parameter's item (None for any other item)."""
+        if counts.kind != "input":
+            return None
+        found = self.declared.get(counts.name[len(INPUT_PREFIX):])
+        return found[0] if found else None
+
+    def definitions(self, counts: ItemCounts, keys: list[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
+        """The buckets of ``counts`` and the bucket of each of ``keys``."""
+        bucketing = counts.bucketing
+        if isinstance(bucketing, InputValueBuckets):
+            found = self.declared.get(counts.name[len(INPUT_PREFIX):])
+            return bucketing.finish(keys, *found) if found else bucketing.finish(keys)
+        return bucketing.finish(keys)
+
+    def make(self, label: str, stats: list[int], failing: list[int], target: int, low: float | None = None,
+             high: float | None = None, failed_here: list[int] | None = None) -> BucketResult:
         return BucketResult(label=label, hits=stats[0], passed=stats[1], failed=stats[2], errored=stats[3],
                             target=target, failing_runs=self.order(failing), low=low, high=high,
                             failed_here=self.order(failed_here) if failed_here else ())
 
 
 def _plain_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[list[BucketResult], list[str]]:
-    defs, index = counts.bucketing.finish(list(counts.stats))
+    defs, index = make.definitions(counts, list(counts.stats))
     sums = [[0, 0, 0, 0] for _ in defs]
     failing: list[list[int]] = [[] for _ in defs]
     here: list[list[int]] = [[] for _ in defs]
@@ -93,9 +114,9 @@ def _plain_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[lis
             for i, d in enumerate(defs)], labels
 
 
-def _component_axis(component: ItemCounts, extra_keys: set) -> tuple[list[str], dict[Hashable, int]]:
+def _component_axis(component: ItemCounts, extra_keys: set, make: _Buckets) -> tuple[list[str], dict[Hashable, int]]:
     keys = list(component.stats) + [k for k in extra_keys if k not in component.stats]
-    defs, index = component.bucketing.finish(keys)
+    defs, index = make.definitions(component, keys)
     return [d.label for d in defs], index
 
 
@@ -113,7 +134,7 @@ def _cross_buckets(counts: ItemCounts, target: int, make: _Buckets) -> tuple[lis
             extra[position].add(part)
     labels, indexes = [], []
     for component, keys in zip(axes, extra, strict=True):
-        axis_labels, index = _component_axis(component, keys)
+        axis_labels, index = _component_axis(component, keys, make)
         labels.append(axis_labels)
         indexes.append(index)
     cells = math.prod(len(axis) for axis in labels)
@@ -164,12 +185,6 @@ def _record(counts: ItemCounts) -> RecordSummary:
     return RecordSummary(count=sum(counts.others.values()), top_values=top)
 
 
-def _drawn(counts: ItemCounts) -> bool:
-    """Whether ``counts`` is a varied parameter a sampler drew from a continuous range."""
-    bucketing = counts.bucketing
-    return isinstance(bucketing, InputValueBuckets) and bucketing.domain is not None and bucketing.domain.drawn
-
-
 def _scatter(counts: ItemCounts, names: list[str]) -> tuple[tuple[float, float, str, str], ...]:
     """The runs of a cross of two drawn ranges as points (each drawn pair is its own key)."""
     points = []
@@ -180,33 +195,25 @@ def _scatter(counts: ItemCounts, names: list[str]) -> tuple[tuple[float, float, 
         verdict = "failed" if st[2] else "error" if st[3] else "passed" if st[1] else "pending"
         failing = counts.failing.get(key)
         points.append((float(x), float(y), verdict, names[failing[0]] if failing else ""))
-    if len(points) > MAX_POINTS:
-        points = points[::math.ceil(len(points) / MAX_POINTS)]
+    if len(points) > MAX_POINTS:          # every failure first, then passes evenly chosen
+        bad = [p for p in points if p[2] != "passed"][:MAX_POINTS]
+        good = [p for p in points if p[2] == "passed"]
+        room = MAX_POINTS - len(bad)
+        points = bad + (good[::math.ceil(len(good) / room)] if room > 0 and good else [])
     return tuple(points)
 
 
-def _declared_range(counts: ItemCounts) -> tuple[float, float, str]:
-    bucketing = counts.bucketing
-    assert isinstance(bucketing, InputValueBuckets) and bucketing.domain is not None
-    domain = bucketing.domain
-    assert domain.low is not None and domain.high is not None
-    return domain.low, domain.high, domain.unit
-
-
-def apply_domains(merger: CoverageMerger, domains: Mapping[str, InputDomain]) -> None:
-    """Give each varied parameter what the variation declared for it, and the ``every`` of a ``cover()``
-    of the same parameter in the same unit (it then sets the width of the range's buckets)."""
+def declarations(merger: CoverageMerger, domains: Mapping[str, InputDomain]) \
+        -> dict[str, tuple[InputDomain, float | None]]:
+    """Per varied parameter: what its variation declared, and the ``every`` of a ``cover()`` of the same
+    parameter in the same unit (it then sets the width of a range's buckets)."""
     covers = {c.decl.full_name: c.decl for c in merger.items.values() if c.kind == "cover" and c.decl is not None}
-    for counts in merger.items.values():
-        bucketing = counts.bucketing
-        if counts.kind != "input" or not isinstance(bucketing, InputValueBuckets):
-            continue
-        key = counts.name[len(INPUT_PREFIX):]
-        bucketing.domain = domain = domains.get(key)
+    found: dict[str, tuple[InputDomain, float | None]] = {}
+    for key, domain in domains.items():
         decl = covers.get(key)
-        if domain is not None and domain.is_range and decl is not None and decl.every \
-                and (decl.unit or "") == domain.unit:
-            bucketing.every = decl.every
+        every = decl.every if decl is not None and domain.is_range and (decl.unit or "") == domain.unit else None
+        found[key] = (domain, every)
+    return found
 
 
 def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
@@ -224,9 +231,11 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         record = _record(counts)
     elif counts.kind in ("cross", "input_cross"):
         buckets, grid, notes = _cross_buckets(counts, settings.at_least, make)
-        if counts.kind == "input_cross" and all(_drawn(c) for c in counts.components):
+        declared = [make.domain_of(c) for c in counts.components]
+        if counts.kind == "input_cross" and all(d is not None and d.drawn for d in declared):
             points = _scatter(counts, make.names)
-            ranges = tuple(_declared_range(c) for c in counts.components)
+            ranges = tuple((d.low, d.high, d.unit) for d in declared if d is not None and d.low is not None
+                           and d.high is not None)
             if not plan.names(counts.name):
                 weight = 0.0
                 notes.append("a cross of two sampled ranges: a scatter of the runs, not part of the overall "
@@ -270,10 +279,9 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
     """The report of everything ``merger`` has read; ``domains``: what the variations declared."""
     plan = plan or CoveragePlan()
     domains = domains or {}
-    apply_domains(merger, domains)
     order = {kind: i for i, kind in enumerate(KIND_ORDER)}
     counted = sorted(merger.items.values(), key=lambda c: order[c.kind])   # stable: first seen within a kind
-    make = _Buckets(merger.run_names, merger.run_verdicts)
+    make = _Buckets(merger.run_names, merger.run_verdicts, declarations(merger, domains))
     items = [_item(c, plan, make) for c in counted]
     warnings = list(warnings or ()) + merger.finish_warnings()
     for entry in plan.unmatched([c.name for c in counted]):

@@ -19,6 +19,7 @@ import functools
 import math
 import re
 from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import replace
 from importlib import resources
 
 from coverage_engine.coverage.buckets import Bucket, DistinctBuckets, format_number, value_label
@@ -37,9 +38,11 @@ _NICE_STEPS = (1.0, 2.0, 2.5, 5.0, 10.0)
 def nice_width(span: float, most: int) -> float:
     """The smallest round width (1, 2, 2.5 or 5 times a power of ten) that splits ``span`` into at most
     ``most`` buckets."""
-    if span <= 0 or most < 1:
+    if not span > 0 or not math.isfinite(span) or most < 1:
         return 1.0
     raw = span / most
+    if raw < 1e-300:                   # a span too small to split: one bucket
+        return span
     power = 10.0 ** math.floor(math.log10(raw))
     for step in _NICE_STEPS:
         width = step * power
@@ -60,23 +63,30 @@ def _spaced(value: float, unit: str) -> str:
 
 
 class RangeAxis:
-    """Equal round-width buckets over a declared range; a value's bucket is found by arithmetic."""
+    """Round-width buckets over a declared range ``[low..high]``: inner edges are multiples of the width,
+    the first and last buckets end at the range's own ends (``[20 kph..25 kph)``, never ``[0 kph..25 kph)``
+    for a range from 20); a value's bucket is found by arithmetic."""
 
     def __init__(self, low: float, high: float, width: float, unit: str) -> None:
-        self.width, self.unit = width, unit
-        self.start = math.floor(low / width + 1e-9) * width
-        self.count = max(1, math.ceil((high - self.start) / width - 1e-9))
-        self.end = self.start + self.count * width
+        self.low, self.high, self.width, self.unit = low, high, width, unit
+        self.start = math.floor(low / width + 1e-9) * width if width > 0 else low
+        self.count = max(1, math.ceil((high - self.start) / width - 1e-9)) if high > low and width > 0 else 1
 
     def index(self, value: float) -> int | None:
-        if value < self.start - 1e-9 * self.width or value > self.end + 1e-9 * self.width:
+        slack = 1e-9 * max(self.width, abs(self.high), abs(self.low), 1e-300)
+        if not self.low - slack <= value <= self.high + slack:
             return None
+        if self.count == 1:
+            return 0
         return min(self.count - 1, max(0, int((value - self.start) // self.width)))
 
     def buckets(self) -> list[Bucket]:
+        if self.count == 1 and self.low == self.high:
+            return [Bucket(_spaced(self.low, self.unit), low=self.low, high=self.high)]
         out = []
         for i in range(self.count):
-            low, high = self.start + i * self.width, self.start + (i + 1) * self.width
+            low = self.low if i == 0 else self.start + i * self.width
+            high = self.high if i == self.count - 1 else self.start + (i + 1) * self.width
             closing = "]" if i == self.count - 1 else ")"
             out.append(Bucket(f"[{_spaced(low, self.unit)}..{_spaced(high, self.unit)}{closing}", low=low, high=high))
         return out
@@ -137,14 +147,18 @@ def _listed_buckets(domain: InputDomain, seen: list[Hashable]) -> tuple[list[Buc
 
 def _range_buckets(domain: InputDomain, seen: list[Hashable], every: float | None) \
         -> tuple[list[Bucket], dict[Hashable, int]] | None:
+    numbers = [numeric_value(key) for key in seen]
+    if any(n is None for n in numbers):
+        return None            # a value that is no number: bucket the values that ran
+    present = [n for n in numbers if n is not None]
+    assert domain.low is not None and domain.high is not None
+    if present and (min(present) < domain.low or max(present) > domain.high):
+        # Runs of another generation drew outside this declaration: the axis spans both.
+        domain = replace(domain, low=min(domain.low, *present), high=max(domain.high, *present))
     axis = range_axis(domain, every)
     index: dict[Hashable, int] = {}
-    for key in seen:
-        number = numeric_value(key)
-        found = axis.index(number) if number is not None else None
-        if found is None:
-            return None        # a value outside the declared range: fall back to the values that ran
-        index[key] = found
+    for key, number in zip(seen, present, strict=True):
+        index[key] = axis.index(number) or 0
     return axis.buckets(), index
 
 
@@ -161,19 +175,16 @@ def domain_buckets(domain: InputDomain, seen: list[Hashable], every: float | Non
 
 class InputValueBuckets(DistinctBuckets):
     """The values of a varied parameter (the keys the merge counts under); :meth:`finish` buckets them by
-    ``domain`` when the variation's declaration is known (set before grading), else by what ran."""
+    ``domain``, what the variation declared, when it is known, else by what ran."""
 
     kind = "input"
     limit = 100_000
 
-    def __init__(self) -> None:
-        self.domain: InputDomain | None = None
-        self.every: float | None = None
-
-    def finish(self, keys: Iterable[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
+    def finish(self, keys: Iterable[Hashable], domain: InputDomain | None = None,
+               every: float | None = None) -> tuple[list[Bucket], dict[Hashable, int]]:
         seen = list(keys)
-        if self.domain is not None:
-            found = domain_buckets(self.domain, seen, self.every)
+        if domain is not None:
+            found = domain_buckets(domain, seen, every)
             if found is not None:
                 return found
         ordered = numeric_order(seen)

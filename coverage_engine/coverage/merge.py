@@ -18,18 +18,22 @@ from __future__ import annotations
 
 from array import array
 from collections import Counter, defaultdict
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Mapping, Sequence
 from operator import itemgetter
 
 from coverage_engine.coverage.buckets import CrossBuckets, DistinctBuckets, bucketing_for
 from coverage_engine.coverage.input_domains import InputValueBuckets
+from coverage_engine.coverage.model import INPUT_ITEM_PREFIX
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.coverage.runs import RunInput
 
 #: Index of a verdict in a key's counters ``[hits, passed, failed, errored]``.
 SLOTS = {"passed": 1, "failed": 2, "error": 3}
 
-INPUT_PREFIX = "input:"
+INPUT_PREFIX = INPUT_ITEM_PREFIX
+
+#: A run's varied values as it carries them: its assignment, or its parameter names with their values.
+VariedValues = Mapping[str, object] | tuple[tuple[str, ...], Sequence]
 CROSS_JOIN = " x "
 
 _FIRST = itemgetter(0)
@@ -53,11 +57,11 @@ def parse_assigned(text: str) -> object:
     return {"True": True, "False": False, "true": True, "false": False}.get(text, text)
 
 
-def _varied(run: RunInput) -> dict[str, object]:
-    """A run's varied values by parameter, however the run carries them."""
+def _varied(run: RunInput) -> VariedValues:
+    """A run's varied values, however the run carries them (see :data:`VariedValues`)."""
     if run.parameters and run.values is not None and len(run.values) == len(run.parameters):
-        return dict(zip(run.parameters, run.values, strict=True))
-    return dict(run.assignment)
+        return run.parameters, run.values
+    return run.assignment
 
 
 def _ignored_key(key: Hashable) -> bool:
@@ -152,6 +156,16 @@ class ItemCounts:
                 if failing:
                     self.failing[key].append(run)
 
+    # -- a failed run's values of items whose event never came: not hits, but where it failed
+    def note_failure(self, values: Sequence, run: int) -> None:
+        try:
+            keys = self.bucketing.keys(list(values))
+        except (TypeError, ValueError):
+            return
+        for key in set(keys):
+            if not _ignored_key(key) and self._row(key) is not None:
+                self.failed_here[key].append(run)
+
     # -- record items: raw values with their runs
     def add_records(self, values: list, runs: list[int]) -> None:
         if not values:
@@ -192,8 +206,9 @@ class CoverageMerger:
         self.run_folders: list[str | None] = []
         self.run_logs: list[str | None] = []
         self.items: dict[str, ItemCounts] = {}
-        #: The varied values of each run that failed or errored (by run id), for the failing-runs tables.
-        self.failing_values: dict[int, dict[str, object]] = {}
+        #: The varied values of each run that failed or errored (by run id), for the failing-runs tables:
+        #: a reference to what the run carries (its assignment, or its parameter names and values), no copy.
+        self.failing_values: dict[int, VariedValues] = {}
         self.warnings: list[str] = []
         self._schemas: dict[Hashable, list[ItemCounts | None]] = {}
         self._inputs: dict[tuple[str, ...], _InputPlan] = {}
@@ -244,18 +259,12 @@ class CoverageMerger:
                     if runs[i].unsampled:
                         self._add_unsampled(targets, runs[i].unsampled, base + i)
 
-    def _add_unsampled(self, targets: list[ItemCounts | None], unsampled: Sequence[list], run: int) -> None:
+    @staticmethod
+    def _add_unsampled(targets: list[ItemCounts | None], unsampled: Sequence[list], run: int) -> None:
         """Where a failing run was when it failed, for the items whose event never came."""
         for counts, values in zip(targets, unsampled, strict=False):
-            if counts is None or not values or counts.kind == "record":
-                continue
-            try:
-                keys = counts.bucketing.keys(list(values))
-            except (TypeError, ValueError):
-                continue
-            for key in set(keys):
-                if not _ignored_key(key) and (key in counts.stats or counts._row(key) is not None):
-                    counts.failed_here[key].append(run)
+            if counts is not None and values and counts.kind != "record":
+                counts.note_failure(values, run)
 
     @staticmethod
     def _add_inputs(plan: _InputPlan, slot: int | None, rows: list, rids: list[int]) -> None:

@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.buckets import value_label
 from coverage_engine.files.sce_domains import drawn_text
+
+#: The prefix of the items of varied parameters (``input:<parameter>``).
+INPUT_ITEM_PREFIX = "input:"
 
 #: Most runs a scatter shows.
 MAX_POINTS = 5_000
@@ -26,6 +30,12 @@ KIND_TITLES = {
     "cross": "cross item",
     "record": "record item",
 }
+
+
+def short_name(name: str) -> str:
+    """An item's or parameter's name without ``input:`` and its scenario (``input:cut_in.ego.speed`` →
+    ``ego.speed``): how axes, columns and values name a parameter in a report."""
+    return name.removeprefix(INPUT_ITEM_PREFIX).split(".", 1)[-1]
 
 
 @dataclass(frozen=True)
@@ -164,8 +174,8 @@ class RunTable:
     reasons: tuple[str | None, ...]
     folders: tuple[str | None, ...]
     logs: tuple[str | None, ...]
-    #: The varied values of each failing run, by run id (spelled by :meth:`values_text`).
-    values: dict[int, dict[str, object]] = field(default_factory=dict)
+    #: The varied values of each failing run, by run id: an assignment, or (parameter names, values).
+    values: Mapping[int, Mapping[str, object] | tuple[tuple[str, ...], Sequence]] = field(default_factory=dict)
     #: The unit of each parameter a sampler drew (its values are shown rounded, with the unit).
     drawn_units: dict[str, str] = field(default_factory=dict)
 
@@ -182,14 +192,23 @@ class RunTable:
         """Ids of the runs that failed or errored, in the natural order of their names (``x2`` before ``x10``)."""
         return list(self._failing)
 
+    def varied(self, run: int) -> dict[str, object]:
+        """A failing run's varied values by parameter ({} for other runs)."""
+        values = self.values.get(run)
+        if values is None:
+            return {}
+        if isinstance(values, tuple):
+            return dict(zip(values[0], values[1], strict=False))
+        return dict(values)
+
     def values_text(self, run: int) -> str:
         """A failing run's varied values on one line (``speed=84.27kph, road=dry``): keys without their
         scenario, drawn numbers rounded to 4 significant digits with their unit; "" when it has none."""
         parts = []
-        for key, value in self.values.get(run, {}).items():
+        for key, value in self.varied(run).items():
             unit = self.drawn_units.get(key)
             shown = drawn_text(value, unit) if unit is not None and isinstance(value, float) else value_label(value)
-            parts.append(f"{key.split('.', 1)[-1]}={shown}")
+            parts.append(f"{short_name(key)}={shown}")
         return ", ".join(parts)
 
 

@@ -15,7 +15,7 @@ from html import escape
 from importlib import resources
 from urllib.parse import quote
 
-from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult
+from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult, short_name
 from coverage_engine.coverage.render_svg import scatter_svg
 
 MAX_CHIPS = 6
@@ -50,9 +50,7 @@ def _rate_hue(rate: float) -> float:
     return 125 * (min(max(rate, 0.0), 100.0) / 100) ** 3
 
 
-def _short(name: str) -> str:
-    """An axis name without the ``input:`` prefix and the scenario path (the full name is above the map)."""
-    return name.removeprefix("input:").rsplit(".", 1)[-1]
+_short = short_name       # the full name is above the map
 
 
 class _Page:

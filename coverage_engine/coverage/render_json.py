@@ -66,7 +66,7 @@ def report_dict(report: CoverageReport) -> dict[str, Any]:
         "runs": {"total": len(runs), **report.verdict_counts},
         "notes": list(report.notes), "warnings": list(report.warnings),
         "items": [_item(item, names) for item in report.items],
-        "failing_runs": [{"name": names[i], "verdict": runs.verdicts[i], "values": runs.values_text(i) or None,
+        "failing_runs": [{"name": names[i], "verdict": runs.verdicts[i], "values": runs.varied(i),
                           "reason": runs.reasons[i], "folder": runs.folders[i], "log": runs.logs[i]}
                          for i in runs.failing()],
     }

@@ -11,7 +11,7 @@ from __future__ import annotations
 from html import escape
 
 from coverage_engine.coverage.input_domains import nice_width
-from coverage_engine.coverage.model import ItemResult
+from coverage_engine.coverage.model import ItemResult, short_name
 
 WIDTH, HEIGHT = 640, 380
 LEFT, RIGHT, TOP, BOTTOM = 64, 16, 14, 46
@@ -31,7 +31,7 @@ def _ticks(low: float, high: float) -> list[float]:
 
 
 def _label(name: str, unit: str) -> str:
-    short = name.removeprefix("input:").rsplit(".", 1)[-1]
+    short = short_name(name)
     return f"{short} ({unit})" if unit else short
 
 

@@ -11,7 +11,7 @@ from rich.console import Console, Group, JustifyMethod
 from rich.table import Table
 from rich.text import Text
 
-from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult
+from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult, short_name
 
 MAX_BUCKET_ROWS = 40
 MAX_GRID_COLUMNS = 12
@@ -190,9 +190,7 @@ def _grid(item: ItemResult, style: _Style) -> tuple[Text, Table] | None:
     return caption, table
 
 
-def _short(name: str) -> str:
-    """An axis name without the ``input:`` prefix and the scenario path."""
-    return name.removeprefix("input:").rsplit(".", 1)[-1]
+_short = short_name
 
 
 def axes_title(axes: tuple[str, ...]) -> str:

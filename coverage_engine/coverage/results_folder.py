@@ -26,7 +26,7 @@ from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import InputDomain, header_domains
+from coverage_engine.files.sce_domains import HEADER_CHARS, InputDomain, header_domains
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
 REPORT_FILE = "test.xml"
@@ -35,8 +35,6 @@ LOG_FILE = "log.txt"
 #: Largest .sce file read for its assignment.
 MAX_SCE_BYTES = 16 * 1024 * 1024
 
-#: How much of a ``.sce`` is read for its header's ``# domain`` lines.
-MAX_HEADER_CHARS = 256 * 1024
 
 #: Verdicts a batch job's ``status`` property names, mapped to run verdicts.
 _STATUS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error"}
@@ -54,7 +52,7 @@ def _domains_from_sce(path: str) -> list[InputDomain]:
     """The ``# domain`` lines of a ``.sce`` file's header ([] when it cannot be read)."""
     try:
         with open(path, encoding="utf-8", errors="replace") as handle:
-            return header_domains(handle.read(MAX_HEADER_CHARS))
+            return header_domains(handle.read(HEADER_CHARS))
     except OSError:
         return []
 
@@ -277,22 +275,47 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
     return source
 
 
+def _holds_jobs(folder: Path) -> bool:
+    """Whether ``folder`` looks like a batch's results folder that has no merged report yet (job folders)."""
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return False
+    return any(e.is_dir(follow_symlinks=False) and any(os.path.lexists(Path(e.path) / name)
+                                                       for name in (REPORT_FILE, RUN_FILE, LOG_FILE))
+               for e in entries if not e.name.startswith("."))
+
+
 def _shards(root: Path) -> list[str]:
-    """The sub-folders of ``root`` that are results folders of their own (a merged ``test.xml`` each):
-    the shards of a batch, or batches, gathered in one folder."""
-    names = []
+    """The sub-folders of ``root`` that are results folders of their own: the shards of a batch, or
+    batches, gathered in one folder. One with a merged ``test.xml`` makes ``root`` such a folder; a
+    sub-folder holding job folders but no merged report yet (a shard stopped or still running) is one of
+    them too, so the merge says it is incomplete instead of leaving it out. A sub-folder with a job's own
+    ``test.xml`` (or its log) means ``root`` is a batch's folder: [] at once, without reading the rest."""
+    merged, unfinished = [], []
     for entry in sorted(os.scandir(root), key=lambda e: e.name):
         if entry.name.startswith(".") or not entry.is_dir(follow_symlinks=False):
             continue
-        report = Path(entry.path) / REPORT_FILE
-        if report.is_file() and not report.is_symlink() and _is_merged(report):
-            names.append(entry.name)
-    return names
+        folder = Path(entry.path)
+        report = folder / REPORT_FILE
+        if report.is_file() and not report.is_symlink():
+            if not _is_merged(report):
+                return []
+            merged.append(entry.name)
+        elif any(os.path.lexists(folder / name) for name in (RUN_FILE, LOG_FILE)):
+            return []
+        elif _holds_jobs(folder):
+            unfinished.append(entry.name)
+    return sorted(merged + unfinished) if merged else []
 
 
 def read_results_folders(paths: list[str], label: str | None = None) -> RunSource:
     """The runs of several results folders (shards of one batch, or batches) as one source: complete when
     each is, with each one's notes (prefixed by its folder) and what each variation declared."""
+    unique: dict[str, str] = {}
+    for path in paths:
+        unique.setdefault(os.path.realpath(path), path)      # a folder named twice is read once
+    paths = list(unique.values())
     if len(paths) == 1 and label is None:
         return read_results_folder(paths[0])
     sources = [read_results_folder(path) for path in paths]     # each checked before any is read

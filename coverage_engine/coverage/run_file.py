@@ -37,6 +37,7 @@ from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: 
     FORMAT_VERSION,
     MAX_FILE_BYTES,
     RUN_FILE,
+    UNSAMPLED_VERSION,
     VERDICTS,
     ItemDecl,
     RunCoverage,
@@ -132,7 +133,8 @@ def run_coverage_dict(run: RunCoverage) -> dict[str, Any]:
         if missed:
             item["unsampled"] = missed
         items.append(item)
-    return {"format": FORMAT, "format_version": FORMAT_VERSION, "run": run_doc, "items": items}
+    version = UNSAMPLED_VERSION if any(run.unsampled) else FORMAT_VERSION
+    return {"format": FORMAT, "format_version": version, "run": run_doc, "items": items}
 
 
 def run_coverage_text(run: RunCoverage) -> str:

@@ -16,6 +16,11 @@ RUN_FILE = "coverage.json"
 
 FORMAT = "scenario-coverage/run"
 FORMAT_VERSION = 1
+#: The version of a file that holds ``unsampled`` values (a reader of version 1 would refuse the key, so
+#: such a file says it needs a newer reader; every other file stays version 1).
+UNSAMPLED_VERSION = 2
+#: The versions this release reads.
+READABLE_VERSIONS = (FORMAT_VERSION, UNSAMPLED_VERSION)
 
 #: A run's verdicts (the batch's ``timeout`` is an ``error``; a run that did not start is ``skipped``).
 VERDICTS = ("passed", "failed", "error", "skipped")

@@ -12,13 +12,13 @@ from collections.abc import Sequence
 from coverage_engine.coverage.buckets import MAX_BUCKETS, default_every, range_bucket_count
 from coverage_engine.coverage.run_records import (
     FORMAT,
-    FORMAT_VERSION,
     ITEM_KINDS,
     MAX_ITEMS,
     MAX_MEMBERS,
     MAX_NAME_CHARS,
     MAX_SAMPLES_PER_ITEM,
     MAX_TEXT_CHARS,
+    READABLE_VERSIONS,
     VERDICTS,
     ItemDecl,
     RunCoverage,
@@ -236,9 +236,9 @@ def validate(doc: object) -> RunCoverage:
     version = top.get("format_version")
     if type(version) is not int:
         raise Invalid(("format_version",), "must be a whole number")
-    if version != FORMAT_VERSION:
+    if version not in READABLE_VERSIONS:
         raise Invalid(("format_version",), f"format_version {version} is not read by this release "
-                                            f"(it reads {FORMAT_VERSION})")
+                                            f"(it reads {' and '.join(map(str, READABLE_VERSIONS))})")
     _unknown_keys(top, {"format", "format_version", "run", "items"}, ())
     run = _run_info(top.get("run"))
     items = top.get("items", [])

@@ -29,8 +29,13 @@ DOMAIN_PREFIX = "# domain "
 #: Declared lists longer than this are written as their range when every value is a number.
 MAX_LISTED = 200
 
-#: Longest domain line read back (a line past it is ignored: a report is never held up by one file).
+#: Longest domain line written or read back (a longer declaration is not written: the report then buckets
+#: the values that ran; a longer line read is ignored, so a report is never held up by one file).
 MAX_DOMAIN_LINE = 64 * 1024
+
+#: How much of the start of a ``.sce`` text holds its header (the value comments and the domain lines):
+#: what readers that want only the header read.
+HEADER_CHARS = 256 * 1024
 
 #: A number with its unit as the variation stores a listed physical value (``30kph``, ``-2.5m/s``).
 _NUMBER_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z_][\w/^]*)?\s*")
@@ -73,8 +78,12 @@ class InputDomain:
 
 def drawn_text(value: float, unit: str = "") -> str:
     """A drawn number as headers and testcase names show it: 4 significant digits and its unit
-    (``116.2kph``); the exact value stays in the assignment and the JUnit properties."""
-    return f"{value:.4g}{unit}"
+    (``116.2kph``, ``12350ms``); the exact value stays in the assignment and the JUnit properties."""
+    if not math.isfinite(value):
+        return f"{value}{unit}"
+    rounded = float(f"{value:.4g}")
+    text = str(int(rounded)) if rounded.is_integer() and abs(rounded) < 1e15 else repr(rounded)
+    return f"{text}{unit}"
 
 
 def numeric_value(value: object) -> float | None:
@@ -112,7 +121,8 @@ def listed_domain(key: str, values: Sequence[object]) -> InputDomain:
 
 
 def domain_line(domain: InputDomain) -> str:
-    """The header line of ``domain`` (ending in a line break)."""
+    """The header line of ``domain`` (ending in a line break); "" when it would be longer than
+    :data:`MAX_DOMAIN_LINE` (thousands of long listed texts: the report buckets what ran instead)."""
     body: dict[str, object] = {"key": domain.key}
     if domain.values is not None:
         body["values"] = list(domain.values)
@@ -124,7 +134,8 @@ def domain_line(domain: InputDomain) -> str:
             body["samples"] = domain.samples
         if domain.count is not None:
             body["count"] = domain.count
-    return DOMAIN_PREFIX + json.dumps(body, ensure_ascii=True, separators=(", ", ": ")) + "\n"
+    line = DOMAIN_PREFIX + json.dumps(body, ensure_ascii=True, separators=(", ", ": ")) + "\n"
+    return line if len(line) <= MAX_DOMAIN_LINE else ""
 
 
 def _domain(body: object) -> InputDomain | None:
@@ -133,14 +144,14 @@ def _domain(body: object) -> InputDomain | None:
     key = body["key"]
     values = body.get("values")
     if isinstance(values, list):
-        if not all(isinstance(v, (str, int, float, bool)) for v in values):
+        if not all(isinstance(v, (str, int, bool)) or (isinstance(v, float) and math.isfinite(v)) for v in values):
             return None
         return InputDomain(key, values=tuple(values))
     ends = body.get("range")
     if not (isinstance(ends, list) and len(ends) == 2 and all(numeric_value(e) is not None for e in ends)):
         return None
     low, high = float(ends[0]), float(ends[1])
-    if not low <= high:
+    if not (low <= high and math.isfinite(high - low)):
         return None
     unit = body.get("unit") if isinstance(body.get("unit"), str) else ""
     samples = body.get("samples")
@@ -158,7 +169,7 @@ def read_domains(lines: Iterable[str]) -> list[InputDomain]:
             continue
         try:
             body = json.loads(line[len(DOMAIN_PREFIX):])
-        except ValueError:
+        except (ValueError, RecursionError):    # RecursionError: brackets nested thousands deep
             continue
         domain = _domain(body)
         if domain is not None:

@@ -14,12 +14,11 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
-from executor.batch.junit_merge import child_cases, job_cases, job_names
+from executor.batch.junit_merge import child_cases, job_cases, job_names, variants_of
 from executor.terminal import printable
 from store.jobs import Job
 from store.queue import QueueStore
 from store.states import FINAL, JobState
-from store.variant_lookup import variant_infos
 
 #: Longest reason shown on a summary line (the whole text is in test.xml and the log).
 REASON_CHARS = 240
@@ -67,7 +66,7 @@ def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[Not
 def not_passed_in_store(store: QueueStore, batch_id: int) -> list[NotPassed]:
     """The jobs of a stored batch that did not pass, read with their test.xml (for their reasons)."""
     jobs = [job for job in store.iter_results(batch_id) if job.status is not JobState.PASSED]
-    return not_passed(jobs, variant_infos(store.engine, [job.scenario_path for job in jobs]))
+    return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
 
 
 def summary_lines(items: list[NotPassed]) -> list[str]:

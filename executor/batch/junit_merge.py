@@ -23,13 +23,16 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from sqlalchemy import Engine
+
+from coverage_engine.files.sce_domains import HEADER_CHARS
 from executor.batch.junit_read import JunitUnreadable, read_cases
 from executor.junit import failure_text, iso_timestamp
 from executor.junit_document import Case, document, suite_element
 from executor.junit_names import declared_scenarios, drawn_units, scenario_classname, variant_name
 from store.jobs import Job
 from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
-from store.variant_lookup import HEADER_CHARS, VariantInfo
+from store.variant_lookup import VariantInfo, variant_infos
 
 #: Characters of a job's log repeated in the merged report (the store and log.txt keep more).
 REPORT_LOG_CHARS = 16 * 1024
@@ -100,6 +103,12 @@ def _variant_from_file(path: str) -> VariantInfo | None:
     except OscError:
         return None
     return VariantInfo(document.assignment, document.scenario, document.source, text[:HEADER_CHARS])
+
+
+def variants_of(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo]:
+    """What the store knows of the variants among ``paths``, with their variation's header (how drawn values
+    are named)."""
+    return variant_infos(engine, paths, HEADER_CHARS)
 
 
 def job_names(job: Job, variant: VariantInfo | None = None) -> JobNames:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
-from executor.batch.junit_merge import merged_report
+from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.junit import write_report
@@ -26,7 +26,6 @@ from executor.process import disk_full
 from store.jobs import Batch, BatchOptions
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState
-from store.variant_lookup import variant_infos
 
 REPORT_FILE = "test.xml"
 
@@ -112,7 +111,7 @@ def write_rerun_report(store: QueueStore, earlier: Batch, batch: Batch, path: st
     (so the report keeps the whole folder, with the reruns' verdicts); returns the combined counts."""
     rerun = {job.name: job for job in store.iter_results(batch.id)}
     jobs = [rerun.get(job.name, job) for job in store.iter_results(earlier.id)]
-    variants = variant_infos(store.engine, [j.scenario_path for j in jobs])
+    variants = variants_of(store.engine, [j.scenario_path for j in jobs])
     try:
         write_report(path, merged_report(jobs, variants))
     except OSError as exc:
@@ -267,7 +266,7 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     report too, as errors (stopped while running) or skipped (not started).
     """
     check_report_path(path)
-    variants = variant_infos(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
+    variants = variants_of(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
     xml_text = merged_report(store.iter_results(batch.id), variants, interrupted=interrupted)
     try:
         write_report(path, xml_text)

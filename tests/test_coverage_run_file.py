@@ -72,8 +72,8 @@ def test_the_builder_refuses_a_sample_of_the_wrong_type():
 
 BAD_FILES = [
     ("{\n  \"format\": 1,,\n}", "2:15", "not valid JSON: Expecting property name enclosed in double quotes"),
-    ('{"format": "scenario-coverage/run", "format_version": 2, "run": {}}', "1:55",
-     "format_version: format_version 2 is not read by this release (it reads 1)"),
+    ('{"format": "scenario-coverage/run", "format_version": 3, "run": {}}', "1:55",
+     "format_version: format_version 3 is not read by this release (it reads 1 and 2)"),
     ('{"format": "scenario-coverage/run", "format_version": 1,\n "run": {"scenario": "s", "verdict": "won"}}',
      "2:38", "run.verdict: must be one of passed, failed, error, skipped"),
     ('{"format": "scenario-coverage/run", "format_version": 1, "run": {"scenario": "s", "verdict": "passed"},\n'

@@ -1,0 +1,70 @@
+"""The verdicts a results folder holds across the batches written into it.
+
+A batch made by ``--rerun-failed`` or ``--only-new`` runs part of a folder and *continues* the batch
+before it (``BatchOptions.continues``); a plain batch starts the folder afresh. The folder's verdicts
+are those of the chain of batches back to that fresh start, the latest verdict of each job winning:
+so ``test.xml`` keeps every job, however many reruns and top-ups followed (issue 31, items 5 and 8).
+
+A later job replaces an earlier one of the same name only once it has a verdict: a rerun that was
+interrupted before reaching a job leaves that job's earlier verdict in the report, not "not run".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Sequence
+
+from store.jobs import Batch, Job, JobSpec
+from store.queue import QueueStore
+from store.states import FINAL, JobState
+
+
+def batch_chain(store: QueueStore, batch: Batch) -> list[Batch]:
+    """``batch`` and the batches it continues, newest first (one batch when it starts afresh)."""
+    chain = [batch]
+    seen = {batch.id}
+    while chain[-1].options.continues is not None and chain[-1].options.continues not in seen:
+        earlier = store.batch(chain[-1].options.continues)
+        seen.add(earlier.id)
+        chain.append(earlier)
+    return chain
+
+
+def latest_jobs(store: QueueStore, batch: Batch) -> Iterator[Job]:
+    """The latest job of every name in the folder's chain of batches, in the order they first appeared.
+
+    A batch that continues none is streamed as it is (a 100,000-job batch is never held in memory).
+    """
+    chain = batch_chain(store, batch)
+    if len(chain) == 1:
+        yield from store.iter_results(batch.id)
+        return
+    latest: dict[str, Job] = {}
+    for each in reversed(chain):
+        for job in store.iter_results(each.id):
+            if job.name not in latest or job.status in FINAL:
+                latest[job.name] = job
+    yield from latest.values()
+
+
+def not_passed(store: QueueStore, batch: Batch) -> list[Job]:
+    """The folder's jobs whose latest verdict is not a pass (``--rerun-failed`` runs these)."""
+    return [job for job in latest_jobs(store, batch) if job.status is not JobState.PASSED]
+
+
+def new_specs(store: QueueStore, batch: Batch | None, specs: Sequence[JobSpec]) -> list[JobSpec]:
+    """``--only-new``: the specs whose file (same path, same content) has no verdict in the folder yet.
+
+    A file that changed since it ran counts as new; so does one whose earlier job never finished.
+    """
+    if batch is None:
+        return list(specs)
+    done = {(job.scenario_path, job.scenario_sha) for job in latest_jobs(store, batch) if job.status in FINAL}
+    return [spec for spec in specs if (spec.scenario_path, spec.scenario_sha) not in done]
+
+
+def counts_of(jobs: Iterable[Job]) -> dict[JobState, int]:
+    """How many of ``jobs`` are in each state."""
+    counts = {state: 0 for state in JobState}
+    for job in jobs:
+        counts[job.status] += 1
+    return counts

@@ -9,18 +9,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from batch_fixtures import BIN, cli_env, run_cli
+from cli_support import SAMPLED_DRIVE as DRIVE
 from cli_support import run_variation
-
-DRIVE = """import osc.helpers
-
-scenario drive:
-    speed: speed with:
-        keep(it in [10kph..90kph])
-    lane: int with:
-        keep(it in [1, 2, 3])
-    do serial:
-        log("x")
-"""
 
 
 def vary(cwd: Path, *args: str) -> str:

@@ -7,18 +7,8 @@ from pathlib import Path
 
 import pytest
 import yaml
+from cli_support import SAMPLED_DRIVE as SAMPLED
 from cli_support import run_variation
-
-SAMPLED = """import osc.helpers
-
-scenario drive:
-    speed: speed with:
-        keep(it in [10kph..90kph])
-    lane: int with:
-        keep(it in [1, 2, 3])
-    do serial:
-        log("x")
-"""
 
 GRID = """import osc.helpers
 

@@ -54,6 +54,12 @@ def test_the_batch_after_a_top_up_runs_only_the_new_variants_and_reports_them_al
     assert document["complete"] is True and document["runs"]["total"] == 8 and document["runs"]["passed"] == 8
     lane = next(item for item in document["items"] if item["name"] == "input:drive.lane")
     assert sum(bucket["hits"] for bucket in lane["buckets"]) == 8
+    stored = subprocess.run([str(BIN / "scenario_coverage"), "json", "--store", "sqlite:///.scenario_store.db",
+                             "results"], cwd=tmp_path, capture_output=True, text=True, env=cli_env(tmp_path))
+    assert stored.returncode == 0, stored.stderr
+    from_store = json.loads(stored.stdout)
+    assert from_store["source"].startswith("batches 1, 2 in ")
+    assert from_store["runs"] == document["runs"]
 
     nothing = batch(tmp_path, "--only-new")
     assert nothing.returncode == 5, nothing.stdout + nothing.stderr

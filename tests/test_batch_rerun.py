@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
 import xml.etree.ElementTree as ET
 from collections import Counter
 
-from batch_fixtures import child_command, cli_env, ledger, run_cli, write_child, write_scenarios
+from batch_fixtures import BIN, child_command, cli_env, ledger, run_cli, write_child, write_scenarios
 
 
 def verdicts(path) -> dict[str, str]:
@@ -96,3 +98,9 @@ def test_the_report_subcommand_of_a_rerun_holds_the_whole_folder(tmp_path):
     assert verdicts(tmp_path / "merged.xml") == {"ok": "passed", "bad": "passed", "worse": "error"}
     root = ET.parse(tmp_path / "merged.xml").getroot()
     assert (root.get("tests"), root.get("errors"), root.get("failures")) == ("3", "1", "0")
+    coverage = subprocess.run([str(BIN / "scenario_coverage"), "json", "--store", "sqlite:///.scenario_store.db",
+                               "results"], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert coverage.returncode == 0, coverage.stderr
+    document = json.loads(coverage.stdout)
+    assert document["source"].startswith("batches 1, 2, 3 in ") and document["complete"] is True
+    assert (document["runs"]["total"], document["runs"]["passed"]) == (3, 2)

@@ -11,11 +11,14 @@ interrupted before reaching a job leaves that job's earlier verdict in the repor
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import TypeVar
 
 from store.jobs import Batch, Job, JobSpec
 from store.queue import QueueStore
 from store.states import FINAL, JobState
+
+T = TypeVar("T")
 
 
 def batch_chain(store: QueueStore, batch: Batch) -> list[Batch]:
@@ -36,14 +39,21 @@ def latest_jobs(store: QueueStore, batch: Batch) -> Iterator[Job]:
     """
     chain = batch_chain(store, batch)
     if len(chain) == 1:
-        yield from store.iter_results(batch.id)
-        return
-    latest: dict[str, Job] = {}
-    for each in reversed(chain):
-        for job in store.iter_results(each.id):
-            if job.name not in latest or job.status in FINAL:
-                latest[job.name] = job
-    yield from latest.values()
+        return store.iter_results(batch.id)
+    return iter(latest_of([store.iter_results(each.id) for each in reversed(chain)],
+                          lambda job: job.name, lambda job: job.status in FINAL))
+
+
+def latest_of(batches: Iterable[Iterable[T]], name: Callable[[T], str], finished: Callable[[T], bool]) -> list[T]:
+    """Of the jobs of ``batches`` (oldest batch first), the latest of each name: a later one replaces an
+    earlier one only when it is ``finished``; the order is that in which the names first appeared."""
+    latest: dict[str, T] = {}
+    for jobs in batches:
+        for job in jobs:
+            key = name(job)
+            if key not in latest or finished(job):
+                latest[key] = job
+    return list(latest.values())
 
 
 def not_passed(store: QueueStore, batch: Batch) -> list[Job]:

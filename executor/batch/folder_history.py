@@ -20,6 +20,9 @@ from store.states import FINAL, JobState
 
 T = TypeVar("T")
 
+#: Jobs read with their results at a time.
+_CHUNK = 500
+
 
 def batch_chain(store: QueueStore, batch: Batch) -> list[Batch]:
     """``batch`` and the batches it continues, newest first (one batch when it starts afresh)."""
@@ -32,16 +35,22 @@ def batch_chain(store: QueueStore, batch: Batch) -> list[Batch]:
     return chain
 
 
-def latest_jobs(store: QueueStore, batch: Batch) -> Iterator[Job]:
+def latest_jobs(store: QueueStore, batch: Batch, *, results: bool = True) -> Iterator[Job]:
     """The latest job of every name in the folder's chain of batches, in the order they first appeared.
 
-    A batch that continues none is streamed as it is (a 100,000-job batch is never held in memory).
+    With ``results`` the jobs carry their JUnit XML and log tails: they are read :data:`_CHUNK` at a
+    time, and a batch that continues none is streamed as it is, so neither a 100,000-job batch nor a
+    long chain of them is ever held in memory with its results.
     """
     chain = batch_chain(store, batch)
     if len(chain) == 1:
-        return store.iter_results(batch.id)
-    return iter(latest_of([store.iter_results(each.id) for each in reversed(chain)],
-                          lambda job: job.name, lambda job: job.status in FINAL))
+        return store.iter_results(batch.id) if results else iter(store.jobs(batch.id))
+    light = latest_of((store.jobs(each.id) for each in reversed(chain)),
+                      lambda job: job.name, lambda job: job.status in FINAL)
+    if not results:
+        return iter(light)
+    return (job for start in range(0, len(light), _CHUNK)
+            for job in store.results_by_id([each.id for each in light[start:start + _CHUNK]]))
 
 
 def latest_of(batches: Iterable[Iterable[T]], name: Callable[[T], str], finished: Callable[[T], bool]) -> list[T]:
@@ -58,7 +67,7 @@ def latest_of(batches: Iterable[Iterable[T]], name: Callable[[T], str], finished
 
 def not_passed(store: QueueStore, batch: Batch) -> list[Job]:
     """The folder's jobs whose latest verdict is not a pass (``--rerun-failed`` runs these)."""
-    return [job for job in latest_jobs(store, batch) if job.status is not JobState.PASSED]
+    return [job for job in latest_jobs(store, batch, results=False) if job.status is not JobState.PASSED]
 
 
 def new_specs(store: QueueStore, batch: Batch | None, specs: Sequence[JobSpec]) -> list[JobSpec]:
@@ -68,7 +77,8 @@ def new_specs(store: QueueStore, batch: Batch | None, specs: Sequence[JobSpec]) 
     """
     if batch is None:
         return list(specs)
-    done = {(job.scenario_path, job.scenario_sha) for job in latest_jobs(store, batch) if job.status in FINAL}
+    done = {(job.scenario_path, job.scenario_sha) for job in latest_jobs(store, batch, results=False)
+            if job.status in FINAL}
     return [spec for spec in specs if (spec.scenario_path, spec.scenario_sha) not in done]
 
 

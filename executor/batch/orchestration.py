@@ -292,16 +292,14 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     job of the folder (:mod:`executor.batch.folder_history`).
     """
     check_report_path(path)
-    continued = batch.options.continues is not None
-    jobs = list(folder_history.latest_jobs(store, batch)) if continued else store.iter_results(batch.id)
-    listed = jobs if continued else store.jobs(batch.id)
+    listed = list(folder_history.latest_jobs(store, batch, results=False))
     variants = variant_infos(store.engine, [j.scenario_path for j in listed])
-    xml_text = merged_report(jobs, variants, interrupted=interrupted)
+    xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
     try:
         write_report(path, xml_text)
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
-    return folder_history.counts_of(listed) if continued else store.counts(batch.id)
+    return folder_history.counts_of(listed)
 
 
 #: Exit code of a batch that did not pass, or could not go on (a full disk).

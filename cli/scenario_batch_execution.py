@@ -345,9 +345,9 @@ def report_command(store_url, batch_id, output, as_json, debug):
         counts = orchestration.write_batch_report(store, batch, output)
         failed = None
         if as_json:
-            from executor.batch.failure_summary import not_passed_in_store
+            from executor.batch.failure_summary import not_passed_in_folder
 
-            failed = not_passed_in_store(store, batch.id)
+            failed = not_passed_in_folder(store, batch)
     finally:
         store.close()
     if failed is not None:
@@ -379,9 +379,9 @@ def _lock_output(folder: str, wait: bool):
 
 def _print_failures(store, batch) -> None:
     """The short summary of the jobs that did not pass (nothing when all passed)."""
-    from executor.batch.failure_summary import not_passed_in_store, summary_lines
+    from executor.batch.failure_summary import not_passed_in_folder, summary_lines
 
-    for text in summary_lines(not_passed_in_store(store, batch.id)):
+    for text in summary_lines(not_passed_in_folder(store, batch)):
         click.echo(text)
 
 

@@ -6,9 +6,10 @@ from __future__ import annotations
 import json
 import subprocess
 import xml.etree.ElementTree as ET
+from collections import Counter
 from pathlib import Path
 
-from batch_fixtures import BIN, cli_env, run_cli
+from batch_fixtures import BIN, child_command, cli_env, ledger, run_cli, write_child, write_scenarios
 from cli_support import SAMPLED_DRIVE as DRIVE
 from cli_support import run_variation
 
@@ -87,3 +88,20 @@ def test_only_new_goes_with_neither_resume_nor_rerun_failed(tmp_path):
         assert "Traceback" not in refused.stderr
     assert "--only-new starts a batch of the new files of -i: it does not go with --resume" in \
         run_cli(["-o", "results", "--only-new", "--resume"], tmp_path, cli_env(tmp_path)).stderr
+
+
+def test_a_top_up_batch_still_reports_and_counts_the_folders_earlier_failure(tmp_path):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"ok": "xml=pass", "bad": "xml=fail"})
+    env = cli_env(tmp_path)
+    assert run_cli(["-i", "in", "-o", "results", "--", *child_command(child)], tmp_path, env).returncode == 1
+    write_scenarios(tmp_path / "in", {"new": "xml=pass"})
+    top_up = run_cli(["-i", "in", "-o", "results", "--only-new", "--", *child_command(child)], tmp_path, env)
+    assert top_up.returncode == 1, top_up.stdout + top_up.stderr
+    assert ledger(tmp_path) == Counter({"ok": 1, "bad": 1, "new": 1})
+    lines = top_up.stdout.splitlines()
+    at = lines.index("--- 1 job(s) did not pass ---")
+    assert lines[at + 1].startswith("FAILED   bad - it failed")
+    assert lines[at + 2].startswith("batch 2: 3 job(s): 2 passed, 1 failed; report ")
+    report = ET.parse(tmp_path / "results" / "test.xml").getroot()
+    assert (report.get("tests"), report.get("failures")) == ("3", "1")

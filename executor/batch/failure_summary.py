@@ -14,9 +14,10 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+from executor.batch.folder_history import latest_jobs
 from executor.batch.junit_merge import child_cases, job_cases, job_names
 from executor.terminal import printable
-from store.jobs import Job
+from store.jobs import Batch, Job
 from store.queue import QueueStore
 from store.states import FINAL, JobState
 from store.variant_lookup import variant_infos
@@ -67,6 +68,13 @@ def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[Not
 def not_passed_in_store(store: QueueStore, batch_id: int) -> list[NotPassed]:
     """The jobs of a stored batch that did not pass, read with their test.xml (for their reasons)."""
     jobs = [job for job in store.iter_results(batch_id) if job.status is not JobState.PASSED]
+    return not_passed(jobs, variant_infos(store.engine, [job.scenario_path for job in jobs]))
+
+
+def not_passed_in_folder(store: QueueStore, batch: Batch) -> list[NotPassed]:
+    """The jobs of the batch's folder whose latest verdict is not a pass: those of the batch, and for a
+    rerun or top-up also those of the batches it continues (what the folder's test.xml holds)."""
+    jobs = [job for job in latest_jobs(store, batch) if job.status is not JobState.PASSED]
     return not_passed(jobs, variant_infos(store.engine, [job.scenario_path for job in jobs]))
 
 

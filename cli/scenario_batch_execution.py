@@ -168,8 +168,8 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
         raise click.UsageError("--simulation is for the built-in runner; with a launch command, pass it in the "
                                "command (-- scenario_execution {SCENARIO} -o {OUTPUT_DIR} --simulation ...)")
     if rerun_failed and (resume or enqueue_only or input_dir is not None or command):
-        raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the latest batch's "
-                               "failures with that batch's input, command and options")
+        raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the jobs of the folder "
+                               "that did not pass, with its latest batch's input, command and options")
     if only_new and (resume or rerun_failed):
         raise click.UsageError("--only-new starts a batch of the new files of -i: it does not go with "
                                + ("--resume" if resume else "--rerun-failed"))

@@ -140,14 +140,17 @@ def _check_post_run(hooks) -> None:
               help="Built-in runner: run every job step-based on this simulation (as scenario_execution "
                    "--simulation); with a launch command, put it in the command instead.")
 @click.option("--rerun-failed", is_flag=True,
-              help="Run again, as a new batch, the jobs that did not pass in the latest batch of -o (like pytest "
-                   "--lf); the report keeps the earlier passes.")
+              help="Run again, as a new batch, the jobs of -o whose latest verdict is not a pass (like pytest "
+                   "--lf); the report keeps the latest verdict of every job of -o.")
+@click.option("--only-new", is_flag=True,
+              help="Run only the files of -i that no earlier batch of -o ran (same path and content), e.g. after "
+                   "'scenario_variation --only-new'; the report keeps the earlier verdicts too.")
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, store_url, debug,
-                command):
+                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, only_new, store_url,
+                debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -165,8 +168,11 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
         raise click.UsageError("--simulation is for the built-in runner; with a launch command, pass it in the "
                                "command (-- scenario_execution {SCENARIO} -o {OUTPUT_DIR} --simulation ...)")
     if rerun_failed and (resume or enqueue_only or input_dir is not None or command):
-        raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the latest batch's "
-                               "failures with that batch's input, command and options")
+        raise click.UsageError("--rerun-failed takes only -o (and -j, --store): it reruns the jobs of the folder "
+                               "that did not pass, with its latest batch's input, command and options")
+    if only_new and (resume or rerun_failed):
+        raise click.UsageError("--only-new starts a batch of the new files of -i: it does not go with "
+                               + ("--resume" if resume else "--rerun-failed"))
     if not resume and not rerun_failed and input_dir is None:
         raise click.UsageError("missing -i/--input-dir")
     if command:                  # none: the built-in runner (scenario_execution forked, not launched)
@@ -183,7 +189,6 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
     try:
         if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
             lock = _lock_output(request.output_dir, wait)
-        earlier = None
         if rerun_failed:
             earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
             if rerun is None:
@@ -192,6 +197,17 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
             click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
                        f"pass in batch {earlier.id}")
             batch = rerun
+        elif only_new:
+            made = orchestration.create_only_new_batch(store, request, mode="shared" if enqueue_only else "local")
+            if made.batch is None:
+                click.echo(f"nothing new: each of the {made.passed_over} scenario file(s) of -i has a verdict in "
+                           f"{output_dir} already; nothing ran")
+                return orchestration.EXIT_NOTHING_RAN
+            batch = made.batch
+            if made.earlier is not None:
+                click.echo(f"batch {batch.id}: {sum(store.counts(batch.id).values())} new scenario file(s); "
+                           f"{made.passed_over} already have a verdict in batch {made.earlier.id} (the report "
+                           "keeps theirs)")
         elif resume:
             batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
         else:
@@ -204,8 +220,6 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
         ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
         counts, signum = ran.counts, ran.signum
         report: str | None = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
-        if earlier is not None and signum is None and ran.disk_full is None:
-            counts = orchestration.write_rerun_report(store, earlier, batch, report)
         _print_failures(store, batch)
         if ran.report_error is not None:
             report = None
@@ -331,9 +345,9 @@ def report_command(store_url, batch_id, output, as_json, debug):
         counts = orchestration.write_batch_report(store, batch, output)
         failed = None
         if as_json:
-            from executor.batch.failure_summary import not_passed_in_store
+            from executor.batch.failure_summary import not_passed_in_folder
 
-            failed = not_passed_in_store(store, batch.id)
+            failed = not_passed_in_folder(store, batch)
     finally:
         store.close()
     if failed is not None:
@@ -365,9 +379,9 @@ def _lock_output(folder: str, wait: bool):
 
 def _print_failures(store, batch) -> None:
     """The short summary of the jobs that did not pass (nothing when all passed)."""
-    from executor.batch.failure_summary import not_passed_in_store, summary_lines
+    from executor.batch.failure_summary import not_passed_in_folder, summary_lines
 
-    for text in summary_lines(not_passed_in_store(store, batch.id)):
+    for text in summary_lines(not_passed_in_folder(store, batch)):
         click.echo(text)
 
 

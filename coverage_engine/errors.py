@@ -7,6 +7,8 @@ nothing below ``cli/`` prints or exits.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from coverage_engine.location import Location
 
 
@@ -22,11 +24,16 @@ class OscError(Exception):
         super().__init__(self.message)
 
     def __str__(self) -> str:
+        return self.located()
+
+    def located(self, place: Callable[[Location], str] = str) -> str:
+        """``file:line:col: error: message``, the position as ``place`` names it (for a variant, the
+        ``.osc`` line the user wrote and the ``.sce`` line: see ``coverage_engine.files.sce.VariantLines``)."""
         loc = self.location
         if loc is not None and loc.line < 1:  # a whole file, no position in it
             return f"{loc.file}: error: {self.message}"
         if loc is not None:
-            return f"{loc}: error: {self.message}"
+            return f"{place(loc)}: error: {self.message}"
         return f"error: {self.message}"
 
     def render(self) -> str:

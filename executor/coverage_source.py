@@ -12,21 +12,26 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 
 from coverage_engine.coverage.errors import RunFileError
 from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
+from executor.batch.folder_history import batch_chain, latest_of
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
 from store.queue import QueueStore
+from store.states import FINAL
 
 _decode = json.JSONDecoder().raw_decode
 
 #: Job states as run verdicts; queued and running jobs are ``pending`` (not finished).
 _VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error",
              "cancelled": "skipped", "queued": "pending", "running": "pending"}
+
+#: Job states (as the store writes them) that are a verdict: a later job of the same name replaces an earlier one.
+_FINISHED = frozenset(state.value for state in FINAL)
 
 
 def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
@@ -46,8 +51,9 @@ def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
 
 
 class _StoreRuns:
-    def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource) -> None:
-        self.records, self.batch_id, self.source = records, batch_id, source
+    def __init__(self, records: CoverageRecords, batch_ids: list[int], source: RunSource) -> None:
+        #: The batch and those it continues, oldest first (see :mod:`executor.batch.folder_history`).
+        self.records, self.batch_ids, self.source = records, batch_ids, source
         self.declarations: dict[int, tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]] = {}
         self.pending = 0
         self.from_disk = 0
@@ -122,9 +128,16 @@ class _StoreRuns:
             return {}
         return value if isinstance(value, dict) else {}
 
+    def _rows(self) -> Iterable[StoredRun]:
+        """The jobs of the batch; for one that continues others, the latest job of each name of them all."""
+        if len(self.batch_ids) == 1:
+            return self.records.iter_batch(self.batch_ids[0])
+        return latest_of([self.records.iter_batch(batch_id) for batch_id in self.batch_ids],
+                         lambda row: row.name, lambda row: row.status in _FINISHED)
+
     def __iter__(self) -> Iterator[RunInput]:
         try:
-            for row in self.records.iter_batch(self.batch_id):
+            for row in self._rows():
                 yield self._run(row)
         finally:
             self.records.close()
@@ -147,11 +160,14 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
     queue = QueueStore.open_existing(url)
     try:
         batch = _pick_batch(queue, results, batch_id)
+        chain = [each.id for each in reversed(batch_chain(queue, batch))]
     finally:
         queue.close()
     records = CoverageRecords.open_existing(url)
-    source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
-    for header in records.variant_headers(batch.id, HEADER_CHARS):
-        source.declare(header_domains(header))
-    source.runs = iter(_StoreRuns(records, batch.id, source))
+    label = f"batches {', '.join(map(str, chain))}" if len(chain) > 1 else f"batch {batch.id}"
+    source = RunSource(label=f"{label} in {records.url}", runs=iter(()), root=batch.output_dir)
+    for batch_id in chain:
+        for header in records.variant_headers(batch_id, HEADER_CHARS):
+            source.declare(header_domains(header))
+    source.runs = iter(_StoreRuns(records, chain, source))
     return source

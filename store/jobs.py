@@ -39,6 +39,9 @@ class BatchOptions:
     shard: str | None = None
     #: Built-in runner only: every job runs step-based on this simulation (``scenario_execution --simulation``).
     simulation: str | None = None
+    #: The batch this one adds to (``--rerun-failed``, ``--only-new``): the folder's report keeps that
+    #: batch's verdicts (and those it continues) for the jobs this one does not run; None: a fresh start.
+    continues: int | None = None
 
     def to_json(self) -> str:
         data = asdict(self)

@@ -12,6 +12,18 @@ import pytest
 EXE = str(Path(sys.executable).parent / "scenario_execution")
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
+#: A scenario with a sampled range and a listed value: what the samplers and ``--only-new`` are tried on.
+SAMPLED_DRIVE = """import osc.helpers
+
+scenario drive:
+    speed: speed with:
+        keep(it in [10kph..90kph])
+    lane: int with:
+        keep(it in [1, 2, 3])
+    do serial:
+        log("x")
+"""
+
 
 def run_cli(*args: str, cwd: Path, timeout: float = 60, env: dict | None = None) -> subprocess.CompletedProcess:
     """Run scenario_execution; stdout and stderr together in ``.stdout``."""

@@ -30,7 +30,8 @@ def test_failed_variants_are_listed_with_values_reason_and_log(tmp_path):
     assert done.returncode == 1
     lines = done.stdout.splitlines()
     at = lines.index("--- 1 job(s) did not pass ---")
-    assert lines[at + 1] == (f"FAILED   gap0[gap=0.5] - 'compare' ({tmp_path / 'out' / 'gap0.sce'}:18:9) failed: "
+    assert lines[at + 1] == (f"FAILED   gap0[gap=0.5] - 'compare' at {tmp_path / 'gap.osc'}:6:9 "
+                             f"({tmp_path / 'out' / 'gap0.sce'}:18:9) failed: "
                              f"0.5 > 1.0 is False  (log: {tmp_path / 'results' / 'gap0' / 'log.txt'})")
     assert lines[at + 2].startswith("batch 1: 2 job(s): 1 passed, 1 failed")
     status = subprocess.run([str(BIN / "scenario_batch_execution"), "status", "--list", "failed", "--json"],

@@ -104,8 +104,8 @@ def test_one_testcase_per_job_in_natural_order_with_names_and_reasons(batch):
         return results[0]
 
     failed = problem("cut1")
-    assert isinstance(failed, Failure) and re.fullmatch(r"'check' \(.*cut1\.sce:\d+:\d+\) failed: 'fail' != 'fail' is False",
-                                                      failed.message)
+    assert isinstance(failed, Failure) and re.fullmatch(
+        r"'check' at .*cut\.osc:8:9 \(.*cut1\.sce:\d+:9\) failed: 'fail' != 'fail' is False", failed.message)
     exit_code = problem("cut2")
     assert isinstance(exit_code, Error) and exit_code.type == "exit-code"
     assert exit_code.message == "exit code 3 although its test.xml passed"
@@ -138,7 +138,7 @@ def test_per_run_files_are_named_after_their_variant(batch):
         assert suite.name == name and case.name.startswith(f"{name}[")
     aborted = JUnitXml.fromfile(str(root / "res/slow0/test.xml"))
     [case] = [c for s in aborted for c in s]
-    assert case.result[0].message.startswith("aborted by SIGTERM while 'wait' (")
+    assert case.result[0].message.startswith("aborted by SIGTERM while 'wait' at ")
 
 
 def test_halted_jobs_are_skipped_testcases_and_progress_is_in_natural_order(batch):

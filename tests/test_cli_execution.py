@@ -127,7 +127,7 @@ def test_sigterm_records_aborted_and_ends_children(tmp_path):
     root = ET.parse(tmp_path / "out/test.xml").getroot()
     assert [c.get("name") for c in root.iter("testcase")] == ["long"]
     message = root.find(".//failure").get("message")
-    assert message.startswith("aborted by SIGTERM while 'run_process' (") and "long.osc:5:9" in message
+    assert message.startswith("aborted by SIGTERM while 'run_process' at long.osc:5:9") and "long.osc:5:9" in message
 
 
 # -- results survive a kill; an abort lists what never ran ------------------------------------------
@@ -171,7 +171,7 @@ def test_ctrl_c_records_scenarios_that_never_started_as_skipped(tmp_path):
     assert names == ["a", "b", "c"]
     assert suite.get("failures") == "1" and suite.get("skipped") == "1"
     cases = {case.get("name"): case for case in suite.iter("testcase")}
-    assert cases["b"].find("failure").get("message").startswith("aborted by SIGINT while 'wait' (")
+    assert cases["b"].find("failure").get("message").startswith("aborted by SIGINT while 'wait' at abc.osc:7:9 ran")
     assert cases["c"].find("skipped").get("message").startswith("not run")
     assert "c done" not in output
 

@@ -43,7 +43,7 @@ def test_failures_carry_the_located_message_and_junit_and_coverage_work(tmp_path
     scenarios(tmp_path)
     done = pytest_run(tmp_path, "--osc", "scen", "--junitxml", "report.xml")
     assert done.returncode == 1
-    assert f"bad: 'compare' ({tmp_path / 'scen' / 'bad.osc'}:5:9) failed: 0.5 > 1.0 is False" in done.stdout
+    assert f"bad: 'compare' at {tmp_path / 'scen' / 'bad.osc'}:5:9 failed: 0.5 > 1.0 is False" in done.stdout
     assert "1 failed, 2 passed" in done.stdout
     cases = {c.get("name"): c for c in ET.parse(tmp_path / "report.xml").getroot().iter("testcase")}
     assert set(cases) == {"good", "bad", "covered"} and cases["bad"].find("failure") is not None

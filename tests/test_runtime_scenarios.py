@@ -84,7 +84,7 @@ def test_emit_end_stops_everything_at_once():
 def test_emit_fail_fails_with_snapshot():
     result, lines, _, _ = run(scenario(serial(log("x"), emit("fail"), log("never"))))
     assert not result.passed
-    assert result.message == "emit fail"
+    assert result.message == "emit fail at test.osc:1:1"
     assert "test" in result.output and "log" in result.output
     assert "never" not in lines
 

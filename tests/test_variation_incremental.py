@@ -5,19 +5,10 @@ from __future__ import annotations
 import itertools
 from pathlib import Path
 
+import pytest
 import yaml
+from cli_support import SAMPLED_DRIVE as SAMPLED
 from cli_support import run_variation
-
-SAMPLED = """import osc.helpers
-
-scenario drive:
-    speed: speed with:
-        keep(it in [10kph..90kph])
-    lane: int with:
-        keep(it in [1, 2, 3])
-    do serial:
-        log("x")
-"""
 
 GRID = """import osc.helpers
 
@@ -49,19 +40,35 @@ def key(sce: dict) -> str:
     return repr(sorted(sce["assignment"].items()))
 
 
-def test_a_larger_lhs_run_adds_only_the_new_draws(tmp_path):
+@pytest.mark.parametrize("strategy", ["random", "sobol", "halton"])
+def test_a_sampler_continues_its_sequence_and_writes_only_the_new_variants(tmp_path, strategy):
+    (tmp_path / "drive.osc").write_text(SAMPLED)
+    vary(tmp_path, "drive.osc", "--strategy", strategy, "--samples", "5", "--seed", "11")
+    before = {p.name: p.read_bytes() for p in (tmp_path / "out").glob("*.sce")}
+    done = vary(tmp_path, "drive.osc", "--strategy", strategy, "--samples", "8", "--seed", "11", "--only-new")
+    assert "wrote 3 new scenario file(s) to out/; 5 variant(s) earlier runs wrote were not written again" \
+        in done.stdout
+    after = variants(tmp_path / "out")
+    assert sorted(after) == sorted(f"drive{i}.sce" for i in range(8))
+    assert all((tmp_path / "out" / name).read_bytes() == data for name, data in before.items())
+    vary(tmp_path, "drive.osc", "--strategy", strategy, "--samples", "8", "--seed", "11", "-o", "fresh")
+    assert {key(v) for v in after.values()} == {key(v) for v in variants(tmp_path / "fresh").values()}
+
+
+def test_lhs_refuses_to_add_to_an_earlier_design_and_says_why(tmp_path):
     (tmp_path / "drive.osc").write_text(SAMPLED)
     vary(tmp_path, "drive.osc", "--strategy", "lhs", "--samples", "20", "--seed", "7")
     before = {p.name: p.read_bytes() for p in (tmp_path / "out").glob("*.sce")}
-    done = vary(tmp_path, "drive.osc", "--strategy", "lhs", "--samples", "50", "--seed", "7", "--only-new")
-    assert "wrote 30 new scenario file(s) to out/; 20 variant(s) earlier runs wrote were not written again" \
-        in done.stdout
-    after = variants(tmp_path / "out")
-    assert sorted(after) == sorted(f"drive{i}.sce" for i in range(50))
-    assert all((tmp_path / "out" / name).read_bytes() == data for name, data in before.items())
-    assert len({key(v) for v in after.values()}) == 50, "a variant was written twice"
-    assert "# strategy lhs, samples 50, seed 7" in (tmp_path / "out" / "drive20.sce").read_text()
-    again = vary(tmp_path, "drive.osc", "--strategy", "lhs", "--samples", "50", "--seed", "7", "--only-new")
+    refused = run_variation(tmp_path, "drive.osc", "--strategy", "lhs", "--samples", "50", "--seed", "7", "--only-new",
+                            "--store", f"sqlite:///{tmp_path}/store.db")
+    assert refused.returncode == 1
+    assert refused.stderr.startswith("drive.osc: error: --strategy lhs --samples 50 --only-new cannot add to the 20 "
+                                     "variant(s) earlier runs wrote (--strategy lhs, --samples 20): a Latin hypercube "
+                                     "of 50 points has one point in each 1/50 of every range")
+    assert "hint: grow a sample run by run with --strategy sobol, halton or random" in refused.stderr
+    assert "Traceback" not in refused.stderr
+    assert {p.name: p.read_bytes() for p in (tmp_path / "out").glob("*.sce")} == before
+    again = vary(tmp_path, "drive.osc", "--strategy", "lhs", "--samples", "20", "--seed", "7", "--only-new")
     assert "wrote 0 new scenario file(s)" in again.stdout
 
 

@@ -99,6 +99,38 @@ class SceDocument:
     extra: dict[str, object] = field(default_factory=dict)
     #: What the variation declared per varied parameter (the header's ``# domain`` lines).
     domains: tuple[InputDomain, ...] = ()
+    #: Lines of the ``.sce`` above its model's first line (a model line's ``.sce`` line minus its own).
+    model_offset: int = 0
+
+
+@dataclass(frozen=True)
+class VariantLines:
+    """Which line of the ``.osc`` a line of a variant's ``.sce`` model stands for.
+
+    The model keeps the line numbers of the ``.osc`` it was generated from (see
+    :mod:`coverage_engine.variation.template`), shifted down by the header above it; so a failure in a
+    variant can name both the line the user wrote and the line of the file that ran.
+    """
+
+    sce_file: str
+    source_file: str
+    offset: int
+
+    def place(self, location: Location) -> str:
+        """``gap.osc:11:9 (out/gap3.sce:24:9)`` for a location in the model, else the location alone."""
+        line = location.line - self.offset
+        if location.file != self.sce_file or location.line < 1 or line < 1:
+            return str(location)
+        return f"{self.source_file}:{line}:{location.column} ({location})"
+
+
+def variant_lines(document: SceDocument) -> VariantLines:
+    """The line map of a loaded ``.sce``: its source shown relative to the working folder when the
+    ``.sce`` path is relative (as the user typed it), absolute otherwise."""
+    source = os.path.join(document.source_dir, document.source)
+    if not os.path.isabs(document.path):
+        source = os.path.relpath(source)
+    return VariantLines(document.path, source, document.model_offset)
 
 
 def is_sce_text(head: str) -> bool:
@@ -227,7 +259,8 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     return SceDocument(
         text=padded, source_dir=source_dir, scenario=scenario, assignment=dict(data["assignment"]),
         format_version=version, source=data["source"], source_sha256=data["source_sha256"],
-        index=index, parameters=parameters, path=path, extra=extra, domains=tuple(header_domains(text)))
+        index=index, parameters=parameters, path=path, extra=extra, model_offset=max(first - 1, 0),
+        domains=tuple(header_domains(text)))
 
 
 #: The last few files read, by path and identity (size, modification time, inode): a run reads its

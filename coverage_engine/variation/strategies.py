@@ -33,6 +33,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
 from coverage_engine.errors import OscError, ResolveError
+from coverage_engine.location import Location
 from coverage_engine.variation.conditions import ConstraintTables
 from coverage_engine.variation.dimensions import Dimension
 from coverage_engine.variation.drawn import DrawnChoices
@@ -59,9 +60,6 @@ class StrategyOptions:
     strength: int = 2
     samples: int | None = None
     seed: int = 0
-    #: ``lhs`` continued by ``--only-new``: the sizes of the Latin hypercubes drawn one after the other
-    #: (the first with ``seed``, each next one with a seed derived from it); empty: one hypercube.
-    blocks: tuple[int, ...] = ()
 
     @property
     def t(self) -> int:
@@ -89,7 +87,7 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     if options.samples is None:
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
     sizes = plan.sizes                     # choices per axis: the dimensions, then the documents if any
-    columns = unit_columns(options.strategy, options.samples, len(sizes), options.seed, options.blocks)
+    columns = unit_columns(options.strategy, options.samples, len(sizes), options.seed)
     count = len(columns[0]) if columns else options.samples
     dimensions: list[Dimension] = list(plan.dimensions)
     choices: list[Sequence[int]] = []
@@ -110,25 +108,29 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
     plan.rows = list(zip(*choices, strict=True)) if choices else [()] * count
 
 
-def continued(options: StrategyOptions, runs: Sequence[dict]) -> StrategyOptions:
-    """``--only-new``: the options that continue the earlier runs' draw instead of restarting it.
+def check_continuable(options: StrategyOptions, held: int, runs: Sequence[dict], where: Location) -> None:
+    """``--only-new``: refuse a Latin hypercube that would be added to ``held`` variants of another design.
 
-    ``random``, ``halton`` and ``sobol`` continue by themselves (their first N points do not depend
-    on how many are drawn, so the points already written are found in the store and passed over). A
-    Latin hypercube of 400 points shares nothing with one of 200, so an ``lhs`` run after one with
-    the same seed draws the earlier hypercube(s) again and a new one for the samples added.
+    ``random``, ``halton`` and ``sobol`` continue by themselves (their first N points do not depend on
+    how many are drawn, so the points already written are found in the store and passed over). A Latin
+    hypercube of N points puts one point in each N-th of every range: the points of an earlier, smaller
+    one are no part of it, so no set of new points turns the earlier files into a larger hypercube.
+    The same design again (same seed and count) is accepted: it writes nothing new.
     """
-    if options.strategy != "lhs" or options.samples is None:
-        return options
-    earlier = [r for r in runs if r.get("strategy") == "lhs" and r.get("seed") == options.seed
-               and isinstance(r.get("samples"), int)]
-    if not earlier:
-        return options
-    last = earlier[-1]
-    blocks = tuple(int(b) for b in last.get("blocks") or [last["samples"]])
-    if options.samples > sum(blocks):
-        blocks += (options.samples - sum(blocks),)
-    return replace(options, blocks=blocks)
+    if options.strategy != "lhs" or not held:
+        return
+    last = runs[-1] if runs else {}
+    if last.get("strategy") == "lhs" and last.get("seed") == options.seed and last.get("samples") == options.samples:
+        return
+    before = f"--strategy {last.get('strategy')}, --samples {last.get('samples')}" if last else "another design"
+    raise StrategyError(
+        f"--strategy lhs --samples {options.samples} --only-new cannot add to the {held} variant(s) earlier runs "
+        f"wrote ({before}): a Latin hypercube of {options.samples} points has one point in each "
+        f"1/{options.samples} of every range, and the points already written are no part of such a design, so "
+        "new points cannot complete it (the union would crowd some strata and leave others empty)", where,
+        hint="grow a sample run by run with --strategy sobol, halton or random and --only-new (they continue "
+             "their sequence), or draw the larger hypercube afresh without --only-new (it replaces the earlier "
+             "files)")
 
 
 def rows_of(plan: VariationPlan, assignments: Iterable[str]) -> list[tuple[int, ...]]:
@@ -199,27 +201,14 @@ def enough_samples(plan: VariationPlan, options: StrategyOptions, factor: int) -
         hint="widen the ranges, loosen the condition, or ask for fewer --samples")
 
 
-def unit_columns(strategy: str, count: int, axes: int, seed: int,
-                 blocks: Sequence[int] = ()) -> list[list[float]]:
-    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``), one list per axis.
-
-    ``blocks`` (``lhs`` only): Latin hypercubes of these sizes one after the other (see :func:`continued`).
-    """
-    if strategy == "lhs" and blocks:
-        columns: list[list[float]] = [[] for _ in range(axes)]
-        sizes = list(blocks) + [max(count - sum(blocks), 0)]
-        for number, size in enumerate(sizes):
-            if size:
-                block = unit_columns("lhs", size, axes, seed if number == 0 else (seed * 1_000_003 + number) % 2**63)
-                for column, part in zip(columns, block, strict=True):
-                    column += part
-        return [column[:count] for column in columns]
+def unit_columns(strategy: str, count: int, axes: int, seed: int) -> list[list[float]]:
+    """``count`` points of ``[0, 1)^axes`` by ``strategy`` (deterministic in ``seed``), one list per axis."""
     rng = random.Random(seed)
     if strategy == "random":                # drawn point by point: axis a of point i is draw i * axes + a
         draws = [rng.random() for _ in range(count * axes)]
         return [draws[a::axes] for a in range(axes)]
     if strategy == "lhs":
-        columns = []
+        columns: list[list[float]] = []
         for _ in range(axes):
             strata = list(range(count))
             rng.shuffle(strata)

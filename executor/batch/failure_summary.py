@@ -14,9 +14,10 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+from executor.batch.folder_history import latest_jobs
 from executor.batch.junit_merge import child_cases, job_cases, job_names, variants_of
 from executor.terminal import printable
-from store.jobs import Job
+from store.jobs import Batch, Job
 from store.queue import QueueStore
 from store.states import FINAL, JobState
 
@@ -66,6 +67,13 @@ def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[Not
 def not_passed_in_store(store: QueueStore, batch_id: int) -> list[NotPassed]:
     """The jobs of a stored batch that did not pass, read with their test.xml (for their reasons)."""
     jobs = [job for job in store.iter_results(batch_id) if job.status is not JobState.PASSED]
+    return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
+
+
+def not_passed_in_folder(store: QueueStore, batch: Batch) -> list[NotPassed]:
+    """The jobs of the batch's folder whose latest verdict is not a pass: those of the batch, and for a
+    rerun or top-up also those of the batches it continues (what the folder's test.xml holds)."""
+    jobs = [job for job in latest_jobs(store, batch) if job.status is not JobState.PASSED]
     return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
 
 

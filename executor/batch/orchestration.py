@@ -16,6 +16,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
@@ -23,7 +24,7 @@ from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.junit import write_report
 from executor.process import disk_full
-from store.jobs import Batch, BatchOptions
+from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState
 
@@ -67,6 +68,46 @@ def output_folder(path: str) -> str:
 
 def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local") -> Batch:
     """Discover the scenario files, keep the shard's share, and enqueue one job per file."""
+    specs = _discovered_specs(request, mode)
+    return store.create_batch(mode=mode, input_dir=str(Path(request.input_dir or ".").resolve()),
+                              output_dir=request.output_dir, host=socket.gethostname(),
+                              command=request.command, options=_shard_options(request), specs=specs)
+
+
+@dataclass(frozen=True)
+class OnlyNew:
+    """What ``--only-new`` made: the batch of new files (None when there is none), the folder's earlier
+    batch it continues (None for a folder with no batch yet) and how many files it passed over."""
+
+    batch: Batch | None
+    earlier: Batch | None
+    passed_over: int
+
+
+def create_only_new_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local") -> OnlyNew:
+    """``--only-new``: a batch of the files of the input that have no verdict in the output folder yet.
+
+    A file counts as run when a job of the folder's batches ran the same path with the same content
+    and has a verdict; the new batch continues the folder's latest batch, so its report holds the
+    earlier verdicts and the new ones (``scenario_variation --only-new`` then this: only the new
+    variants run, and the report covers them all).
+    """
+    specs = _discovered_specs(request, mode)
+    earlier = store.latest_batch(output_dir=request.output_dir)
+    fresh = folder_history.new_specs(store, earlier, specs)
+    if specs and not fresh:
+        return OnlyNew(None, earlier, len(specs))
+    options = _shard_options(request)
+    if earlier is not None:
+        options = replace(options, continues=earlier.id)
+    batch = store.create_batch(mode=mode, input_dir=str(Path(request.input_dir or ".").resolve()),
+                               output_dir=request.output_dir, host=socket.gethostname(),
+                               command=request.command, options=options, specs=fresh)
+    return OnlyNew(batch, earlier, len(specs) - len(fresh))
+
+
+def _discovered_specs(request: BatchRequest, mode: str) -> list[JobSpec]:
+    """One job spec per scenario file of the request's input folders, limited to its shard."""
     if request.input_dir is None:
         raise BatchError("-i/--input-dir is required (except with --resume)")
     files = discover(request.input_dir, *request.more_inputs, recursive=request.recursive)
@@ -74,52 +115,36 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
         print(f"warning: {name}: the file name is not UTF-8; its job fails (rename the file)", file=sys.stderr)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
-    specs = job_specs(files, request.shard)
-    options = request.options
-    if request.shard is not None:
-        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
-    return store.create_batch(mode=mode, input_dir=str(Path(request.input_dir).resolve()),
-                              output_dir=request.output_dir, host=socket.gethostname(),
-                              command=request.command, options=options, specs=specs)
+    return job_specs(files, request.shard)
+
+
+def _shard_options(request: BatchRequest) -> BatchOptions:
+    if request.shard is None:
+        return request.options
+    return replace(request.options, shard=f"{request.shard.index}/{request.shard.count}")
 
 
 def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch | None]:
-    """``--rerun-failed``: a new batch of the jobs that did not pass in the latest batch of ``output_dir``.
+    """``--rerun-failed``: a new batch of the jobs of ``output_dir`` whose latest verdict is not a pass.
 
-    Returns ``(earlier, new)``; ``new`` is None when every job of the earlier batch passed. The new batch
-    runs like the earlier one (its command and options) and writes into the same job folders (their
-    earlier logs are kept as ``log.<n>.txt``).
+    Returns ``(earlier, new)``: the folder's latest batch, and the new one (None when every job of the
+    folder passed). The new batch runs like the earlier one (its command and options), writes into the
+    same job folders (their earlier logs are kept as ``log.<n>.txt``) and continues the earlier batch,
+    so the folder's report keeps every job's latest verdict however many reruns follow.
     """
     earlier = store.latest_batch(output_dir=output_dir)
     if earlier is None:
         raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url}: nothing to rerun")
-    files = [Path(job.scenario_path) for job in store.jobs(earlier.id) if job.status is not JobState.PASSED]
+    files = [Path(job.scenario_path) for job in folder_history.not_passed(store, earlier)]
     missing = [str(f) for f in files if not f.is_file()]
     if missing:
         raise BatchError(f"--rerun-failed: scenario file(s) gone since batch {earlier.id}: {', '.join(missing[:3])}")
     if not files:
         return earlier, None
     batch = store.create_batch(mode="local", input_dir=earlier.input_dir, output_dir=output_dir,
-                               host=socket.gethostname(), command=earlier.command, options=earlier.options,
-                               specs=job_specs(files))
+                               host=socket.gethostname(), command=earlier.command,
+                               options=replace(earlier.options, continues=earlier.id), specs=job_specs(files))
     return earlier, batch
-
-
-def write_rerun_report(store: QueueStore, earlier: Batch, batch: Batch, path: str | os.PathLike[str]) -> dict[
-        JobState, int]:
-    """The merged report of a rerun: the earlier batch's jobs that passed, then every rerun job's new result
-    (so the report keeps the whole folder, with the reruns' verdicts); returns the combined counts."""
-    rerun = {job.name: job for job in store.iter_results(batch.id)}
-    jobs = [rerun.get(job.name, job) for job in store.iter_results(earlier.id)]
-    variants = variants_of(store.engine, [j.scenario_path for j in jobs])
-    try:
-        write_report(path, merged_report(jobs, variants))
-    except OSError as exc:
-        raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
-    counts = {state: 0 for state in JobState}
-    for job in jobs:
-        counts[job.status] += 1
-    return counts
 
 
 #: The options stored with a batch (the fields of :class:`store.jobs.BatchOptions`) and their command-line
@@ -140,9 +165,7 @@ def _shown(value: object) -> str:
 def option_differences(batch: Batch, request: BatchRequest, given: Iterable[str]) -> list[str]:
     """``--flag X (the batch has Y)`` for each option in ``given`` (as typed) that differs from the stored batch."""
     wanted = set(given)
-    options = request.options
-    if request.shard is not None:
-        options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
+    options = _shard_options(request)
     out = []
     if "input_dir" in wanted and request.input_dir is not None and \
             str(Path(request.input_dir).resolve()) != batch.input_dir:
@@ -263,16 +286,19 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts.
 
     ``interrupted`` (``Ctrl-C``, ``SIGTERM``) says the batch was stopped: its unfinished jobs are in the
-    report too, as errors (stopped while running) or skipped (not started).
+    report too, as errors (stopped while running) or skipped (not started). A batch that continues
+    earlier ones (``--rerun-failed``, ``--only-new``) reports, and counts, the latest verdict of every
+    job of the folder (:mod:`executor.batch.folder_history`).
     """
     check_report_path(path)
-    variants = variants_of(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
-    xml_text = merged_report(store.iter_results(batch.id), variants, interrupted=interrupted)
+    listed = list(folder_history.latest_jobs(store, batch, results=False))
+    variants = variants_of(store.engine, [j.scenario_path for j in listed])
+    xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
     try:
         write_report(path, xml_text)
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
-    return store.counts(batch.id)
+    return folder_history.counts_of(listed)
 
 
 #: Exit code of a batch that did not pass, or could not go on (a full disk).

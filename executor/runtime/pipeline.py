@@ -126,6 +126,14 @@ def _variant(scenario: str):
         return None
 
 
+def _located(exc: OscError, scenario: str) -> str:
+    """The one-line message of a file that did not load, naming where (for a variant, the ``.osc`` line too)."""
+    from coverage_engine.files.sce import variant_lines
+
+    document = _variant(scenario) if exc.location is not None else None
+    return exc.located(variant_lines(document).place if document is not None else str)
+
+
 def report_names(scenario: str, runs=(), document=None):
     """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header,
     ``document`` when it was read already)."""
@@ -170,8 +178,8 @@ def execute(request: ExecutionRequest) -> int:
         if output_root and not request.dry_run:
             from executor.junit import parse_error_result, write_results
 
-            write_results(output_root, [parse_error_result(request.scenario, exc.message, str(exc))],
-                          report_names(request.scenario))
+            write_results(output_root, [parse_error_result(request.scenario, _located(exc, request.scenario),
+                                                           str(exc))], report_names(request.scenario))
         raise
 
     if request.log_model:
@@ -185,6 +193,7 @@ def execute(request: ExecutionRequest) -> int:
 
 
 def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
+    from coverage_engine.files.sce import variant_lines
     from coverage_engine.resolve.evaluate import add_import_paths
     from executor.runtime.planned_runs import RunOrigin, plan_runs
     from executor.runtime.session import SessionOptions, run_session
@@ -198,8 +207,9 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     runs = plan_runs(loaded, output_root)
     document = _variant(request.scenario)
     names = report_names(request.scenario, runs, document) if output_root else None
-    origin = RunOrigin(request.scenario, os.path.splitext(os.path.basename(request.scenario))[0]
-                       if document is not None else None, document.assignment if document is not None else None)
+    origin = RunOrigin(request.scenario) if document is None else \
+        RunOrigin(request.scenario, os.path.splitext(os.path.basename(request.scenario))[0], document.assignment,
+                  variant_lines(document))
     if not runs:
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED

@@ -15,6 +15,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from coverage_engine.errors import ParameterFileError
+from coverage_engine.files.sce import VariantLines
+from coverage_engine.location import Location
 from coverage_engine.resolve.model import Scenario, ScenarioFile
 from coverage_engine.resolve.overrides import OUTPUT_DIR_KEY
 
@@ -25,10 +27,17 @@ class RunOrigin:
     parameters and their values, from the ``.sce`` header; empty for an ``.osc``)."""
 
     def __init__(self, source: str | None = None, variant: str | None = None,
-                 assignment: dict[str, object] | None = None) -> None:
+                 assignment: dict[str, object] | None = None, lines: VariantLines | None = None) -> None:
         self.source = source
         self.variant = variant
         self.assignment = dict(assignment or {})
+        #: A variant's map from its ``.sce`` lines to those of the ``.osc`` the user wrote.
+        self.lines = lines
+
+    def place(self, location: Location) -> str:
+        """How a failure message names ``location``: ``file:line:col``, and for a variant the ``.osc``
+        line the user wrote before the ``.sce`` line (``gap.osc:11:9 (out/gap3.sce:24:9)``)."""
+        return self.lines.place(location) if self.lines is not None else str(location)
 
 
 class PlannedRun:

@@ -17,6 +17,7 @@ import py_trees
 from py_trees.common import Status
 
 from coverage_engine.errors import OscError
+from coverage_engine.location import Location
 from coverage_engine.resolve.evaluate import EvaluationError
 from coverage_engine.resolve.model import Scenario
 from executor.actions.base import ActionError
@@ -36,13 +37,15 @@ def snapshot(root: py_trees.behaviour.Behaviour) -> str:
         return f"(no tree snapshot: {exc})"
 
 
-def describe_error(exc: BaseException) -> str:
-    """One line for an exception raised while a scenario ran."""
-    if isinstance(exc, (OscError, SimulationError)):
+def describe_error(exc: BaseException, place: Callable[[Location], str] = str) -> str:
+    """One line for an exception raised while a scenario ran, its location named by ``place``."""
+    if isinstance(exc, OscError):
+        return exc.located(place)
+    if isinstance(exc, SimulationError):
         return str(exc)
     if isinstance(exc, (ActionError, EvaluationError)):
         location = getattr(exc, "location", None)
-        return f"{location}: {exc}" if location else str(exc)
+        return f"{place(location)}: {exc}" if location else str(exc)
     return f"{type(exc).__name__}: {exc}"
 
 
@@ -54,13 +57,14 @@ def _leaf_with(root: py_trees.behaviour.Behaviour, status: Status):
     return None
 
 
-def where(root: py_trees.behaviour.Behaviour | None, status: Status) -> tuple[str, str]:
-    """``("'name' (file:line:col)", feedback)`` of the behaviour that has ``status`` (``("", "")`` if none)."""
+def where(root: py_trees.behaviour.Behaviour | None, status: Status,
+          place: Callable[[Location], str] = str) -> tuple[str, str]:
+    """``("'name' at file:line:col", feedback)`` of the behaviour that has ``status`` (``("", "")`` if none)."""
     node = None if root is None else _leaf_with(root, status)
     if node is None or node is root:
         return "", ""
     location = getattr(node, "osc_location", None)
-    return f"'{node.name}'" + (f" ({location})" if location else ""), node.feedback_message or ""
+    return f"'{node.name}'" + (f" at {place(location)}" if location else ""), node.feedback_message or ""
 
 
 class ScenarioRunner:
@@ -184,26 +188,28 @@ class ScenarioRunner:
         result = ScenarioResult(self.name, False, start_time=time.time(), output_dir=self.context.output_dir)
         signum = 0
         ticking = False
+        place = self.context.origin.place if self.context.origin is not None else str
         try:
             self._setup()
             ticking = True
             status = self._tick_loop()
             result.passed = status is Status.SUCCESS
             if not result.passed:
-                failed, why = where(self.root, Status.FAILURE)
+                failed, why = where(self.root, Status.FAILURE, place)
                 result.message = (f"{failed} failed" + (f": {why}" if why else "")) if failed else \
-                    "the scenario's behaviour tree failed"
+                    f"the behaviour tree of scenario '{self.scenario.name}' at {place(self.scenario.location)} failed"
         except ScenarioEnd as end:
             result.passed = end.success
-            result.message = "" if end.success else end.message
+            result.message = "" if end.success else _located(end, place)
             _mark_path(end.behaviour, Status.SUCCESS if end.success else Status.FAILURE)
         except (Aborted, KeyboardInterrupt) as exc:
             signum = exc.signum if isinstance(exc, Aborted) else 2
-            running = where(self.root, Status.RUNNING)[0] if ticking else ""
+            running = where(self.root, Status.RUNNING, place)[0] if ticking else ""
             result.message = f"aborted by {_signal_name(signum)}" + (f" while {running} ran" if running else "")
             result.aborted = True
         except Exception as exc:  # noqa: BLE001 - anything raised by actions, expressions or plugins
-            result.message = describe_error(exc) if ticking else f"setup failed: {describe_error(exc)}"
+            described = describe_error(exc, place)
+            result.message = described if ticking else f"setup failed: {described}"
             if logger.debug_enabled:
                 import traceback
 
@@ -234,6 +240,12 @@ def _signal_name(signum: int) -> str:
         return signal.Signals(signum).name
     except ValueError:
         return f"signal {signum}"
+
+
+def _located(end: ScenarioEnd, place: Callable[[Location], str]) -> str:
+    """The failure message of ``emit fail`` with where it stands (``emit fail at bad.osc:6:9``)."""
+    location = getattr(end.behaviour, "osc_location", None)
+    return f"{end.message} at {place(location)}" if location is not None else end.message
 
 
 def _mark_path(behaviour, status: Status) -> None:

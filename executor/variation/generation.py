@@ -136,7 +136,8 @@ def run(request: VariationRequest) -> int:
             plan = build_plan(Path(request.scenario), documents)
             if engine is not None and held is None:
                 held = _held(plan, request, engine)
-                options = strategies.continued(options, held.runs)
+                strategies.check_continuable(options, len(held.assignments), held.runs,
+                                             Location(str(plan.path), 0, 0))
             strategies.draw_continuous(plan, strategies.oversampled(options, draw))
             wanted = plan.total if draw == 1 else options.samples or 0
             if wanted > limit and not covering:
@@ -176,7 +177,7 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
-            return _write(plan, request, engine or _open_store(request.store), seed, held, options.blocks, tuples)
+            return _write(plan, request, engine or _open_store(request.store), seed, held, tuples)
 
 
 def _open_store(url: str | None) -> Engine:
@@ -219,7 +220,7 @@ def _held(plan: VariationPlan, request: VariationRequest, engine: Engine) -> Hel
 
 
 def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed: int | None = None,
-           held: HeldVariants | None = None, blocks: tuple[int, ...] = (),
+           held: HeldVariants | None = None,
            tuples: TupleCoverage | None = None) -> int:
     from coverage_engine.variation.output import (
         VariantWriteError,
@@ -272,7 +273,6 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
         recorder = VariationRecorder(
             engine, source_path=str(plan.path.resolve()), source_sha256=source_sha256(plan.text),
             source_text=plan.text, options={**request.recorded_options(plan.path, seed),
-                                            **({"blocks": list(blocks)} if blocks else {}),
                                             **({"tuples": dataclasses.asdict(tuples)} if tuples else {}),
                                             "variants": plan.total, "excluded_by_conditions": plan.excluded},
             output_dir=str(output_dir.resolve()), skipped=plan.total - plan.valid_count())

@@ -1,6 +1,6 @@
 """Every failure names where it happened (issue 31 item 7): ``file:line:col`` in each JUnit failure message,
 and for a variant the line of the ``.osc`` the user wrote before the ``.sce`` line that ran
-(``emit fail at gap.osc:11:9 (out/gap3.sce:24:9)``); through the real CLIs, read from the files they write."""
+(``emit fail at gap.osc:11:9 (out/gap3.sce:26:9)``); through the real CLIs, read from the files they write."""
 
 from __future__ import annotations
 
@@ -71,12 +71,12 @@ def test_a_failing_variant_names_the_osc_line_and_the_sce_line(tmp_path):
     (tmp_path / "gap.osc").write_text(VARIED)
     assert run(tmp_path, "scenario_variation", "gap.osc").returncode == 0
     sce = (tmp_path / "out" / "gap3.sce").read_text().splitlines()
-    assert sce[23].strip() == "emit fail"                      # line 24 of the .sce, line 11 of the .osc
+    assert sce[25].strip() == "emit fail"                      # line 26 of the .sce (2 domain lines in its header), line 11 of the .osc
     done = run(tmp_path, "scenario_execution", "out/gap3.sce", "-o", "r")
     assert done.returncode == 1
     assert list(failure_messages(tmp_path / "r" / "test.xml").values()) == ["emit fail at gap.osc:11:9 "
-                                                                           "(out/gap3.sce:24:9)"]
-    assert "Scenario 'gap' failed: emit fail at gap.osc:11:9 (out/gap3.sce:24:9)" in done.stdout
+                                                                           "(out/gap3.sce:26:9)"]
+    assert "Scenario 'gap' failed: emit fail at gap.osc:11:9 (out/gap3.sce:26:9)" in done.stdout
 
 
 def test_a_variant_that_does_not_load_names_both_lines(tmp_path):
@@ -87,7 +87,7 @@ def test_a_variant_that_does_not_load_names_both_lines(tmp_path):
     done = run(tmp_path, "scenario_execution", "out/gap3.sce", "-o", "r")
     assert done.returncode == 1
     assert list(failure_messages(tmp_path / "r" / "test.xml").values()) == \
-        ["gap.osc:10:13 (out/gap3.sce:23:13): error: unknown name 'nosuch'"]
+        ["gap.osc:10:13 (out/gap3.sce:25:13): error: unknown name 'nosuch'"]
 
 
 def test_the_batch_report_and_summary_name_both_lines_of_each_failing_variant(tmp_path):
@@ -99,5 +99,5 @@ def test_the_batch_report_and_summary_name_both_lines_of_each_failing_variant(tm
     assert len(messages) == 8
     for index in range(8):
         name = next(n for n in messages if n.startswith(f"gap{index}["))
-        assert messages[name] == f"emit fail at {tmp_path / 'gap.osc'}:11:9 ({tmp_path / 'out' / f'gap{index}.sce'}:24:9)"
-    assert f"emit fail at {tmp_path / 'gap.osc'}:11:9 ({tmp_path / 'out' / 'gap3.sce'}:24:9)" in done.stdout
+        assert messages[name] == f"emit fail at {tmp_path / 'gap.osc'}:11:9 ({tmp_path / 'out' / f'gap{index}.sce'}:26:9)"
+    assert f"emit fail at {tmp_path / 'gap.osc'}:11:9 ({tmp_path / 'out' / 'gap3.sce'}:26:9)" in done.stdout

@@ -102,8 +102,9 @@ def test_the_kubernetes_manifests_validate_against_the_kubernetes_schema():
 def test_the_worker_image_installs_this_repository(tmp_path):
     """The Job's image comes from docs/recipes/Containerfile, which installs the repository itself: it copies
     every package pyproject.toml ships, and the wheel built from them carries the grammar and libraries."""
-    import tomllib
     import zipfile
+
+    import tomllib
 
     containerfile = (RECIPES / "Containerfile").read_text()
     copied = set(re.findall(r"^COPY (\w+) /src/\1$", containerfile, re.MULTILINE))

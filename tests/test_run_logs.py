@@ -138,3 +138,16 @@ def test_a_killed_run_leaves_every_line_written_so_far(tmp_path):
     lines = records(log)                              # every line complete JSON
     assert lines[0]["scenario"] == "long" and any(line["status"] == "SUCCESS" for line in lines[1:])
     assert len(rows(tmp_path / "out/tick_timing.csv")) >= 1
+
+
+def test_a_link_where_a_log_goes_is_not_followed(tmp_path):
+    (tmp_path / "checked.osc").write_text(FAILING, encoding="utf-8")
+    (tmp_path / "out").mkdir()
+    target = tmp_path / "elsewhere.txt"
+    target.write_text("keep me", encoding="utf-8")
+    (tmp_path / "out/behaviors.jsonl").symlink_to(target)
+    done = run_cli("checked.osc", "-o", "out", "--bt-log", cwd=tmp_path)
+    assert done.returncode == 1                                   # the scenario's own failure, reported as usual
+    assert "Scenario 'checked': cannot record into" in done.stdout and "Traceback" not in done.stdout
+    assert "Scenario 'checked' failed: 'compare'" in done.stdout
+    assert target.read_text(encoding="utf-8") == "keep me"

@@ -202,9 +202,14 @@ def recorders(folder: str | None, clock: Clock, scenario: str, scenario_file: st
     if folder is None:
         return []
     found: list[Recorder] = []
-    if bt_log:
-        found.append(BehaviourLog(folder, clock, scenario, scenario_file, tick_period))
-    if tick_log:
-        driver = "simulation_step" if isinstance(clock, SimulationClock) else "wall_loop"
-        found.append(TickTiming(folder, clock, tick_period, driver))
+    try:
+        if bt_log:
+            found.append(BehaviourLog(folder, clock, scenario, scenario_file, tick_period))
+        if tick_log:
+            driver = "simulation_step" if isinstance(clock, SimulationClock) else "wall_loop"
+            found.append(TickTiming(folder, clock, tick_period, driver))
+    except OSError:
+        for recorder in found:          # the one opened before the failure
+            recorder.close()
+        raise
     return found

@@ -179,7 +179,12 @@ def _recorders(options: SessionOptions, context: ScenarioContext, name: str, per
     from executor.runtime.recording import ACTION_TIMING, BEHAVIOUR_LOG, TICK_TIMING, recorders
 
     folder = context.output_dir
-    found = recorders(folder, context.clock, name, options.scenario_file, period, options.bt_log, options.tick_log)
+    try:
+        found = recorders(folder, context.clock, name, options.scenario_file, period, options.bt_log,
+                          options.tick_log)
+    except OSError as exc:       # e.g. a link planted under the name: the run goes on without its records
+        logger.error(f"Scenario '{name}': cannot record into {folder}: {exc.strerror or exc}")
+        return []
     if options.bt_log:
         logger.info(f"Recording behaviour tree status to {os.path.join(folder, BEHAVIOUR_LOG)}")
     if options.tick_log:

@@ -45,9 +45,15 @@ MAX_STEP_DURATION = 86400.0
               help="Step-based simulation: 'module.path:Class' or 'path/to/file.py:Class'.")
 @click.option("--output-result-per-scenario", is_flag=True,
               help="Write test.xml into each scenario's output directory instead of one at the root.")
+@click.option("--bt-log", is_flag=True,
+              help="Record each behaviour's status over time to <output-dir>/behaviors.jsonl (needs --output-dir).")
+@click.option("--tick-log", is_flag=True,
+              help="Record tick timing to <output-dir>/tick_timing.csv and each action call's timing to "
+                   "<output-dir>/action_timing.csv (needs --output-dir).")
 @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
 def command(scenario, debug, log_model, live_tree, output_dir, dry_run, dot, step_duration,
-            scenario_parameter_file, create_template, post_run, simulation, output_result_per_scenario):
+            scenario_parameter_file, create_template, post_run, simulation, output_result_per_scenario, bt_log,
+            tick_log):
     """Execute the scenarios of SCENARIO (an .osc or .sce file)."""
     if scenario is None:
         raise click.UsageError("missing the scenario file (an .osc or .sce file)")
@@ -57,7 +63,7 @@ def command(scenario, debug, log_model, live_tree, output_dir, dry_run, dot, ste
         scenario=scenario, output_dir=output_dir, dry_run=dry_run, log_model=log_model, debug=debug,
         live_tree=live_tree, dot=dot, step_duration=step_duration, parameter_file=scenario_parameter_file,
         create_template=create_template, post_run=tuple(post_run), simulation=simulation,
-        per_scenario=output_result_per_scenario)
+        per_scenario=output_result_per_scenario, bt_log=bt_log, tick_log=tick_log)
     return execute(request)
 
 

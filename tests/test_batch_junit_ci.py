@@ -36,7 +36,7 @@ SLOW = """import osc.helpers
 
 scenario slow:
     gap: time = 1s
-    keep(gap in [20s])
+    keep(gap in [60s])
     do serial:
         log("waiting")
         wait elapsed(gap)
@@ -69,7 +69,7 @@ def batch(tmp_path_factory):
     for sce in [*(root / "v1").glob("*.sce"), *(root / "v2").glob("*.sce")]:
         shutil.copy(sce, root / "in" / sce.name)
     command = ["--", "sh", "-c", WRAPPER, "{SCENARIO}", "{OUTPUT_DIR}"]
-    first = run_cli(["-i", "in", "-o", "res", "-j", "2", "--timeout", "1.5", "--grace", "2", *command], root, env)
+    first = run_cli(["-i", "in", "-o", "res", "-j", "2", "--timeout", "12", "--grace", "2", *command], root, env)
     halted = run_cli(["-i", "in", "-o", "halted", "--halt-on-failure", *command], root, env)
     return root, first, halted
 
@@ -95,7 +95,7 @@ def test_one_testcase_per_job_in_natural_order_with_names_and_reasons(batch):
     assert [suite for suite, _ in cases] == NAMES        # cut2 before cut10, one testcase each
     by_suite = {suite: case for suite, case in cases}
     assert by_suite["cut4"].name == "cut4[mode=ok4]" and by_suite["cut4"].classname == "cut.cut_in"
-    assert by_suite["slow0"].name == "slow0[gap=20s]" and by_suite["slow0"].classname == "slow.slow"
+    assert by_suite["slow0"].name == "slow0[gap=60s]" and by_suite["slow0"].classname == "slow.slow"
     assert all(len(name) <= 120 for name in (case.name for _, case in cases))
 
     def problem(name):
@@ -113,7 +113,7 @@ def test_one_testcase_per_job_in_natural_order_with_names_and_reasons(batch):
     assert isinstance(crashed, Error) and crashed.message == "no test.xml written (exit code 4)"
     timed_out = problem("slow0")
     assert isinstance(timed_out, Error) and timed_out.type == "timeout"
-    assert timed_out.message == "timed out after 1.5 s"
+    assert timed_out.message == "timed out after 12 s"
     for name, kind in (("cut1", "'check'"), ("cut2", "exit code 3"), ("cut3", "no test.xml"),
                        ("slow0", "timed out")):
         result = problem(name)

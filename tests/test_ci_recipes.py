@@ -87,11 +87,57 @@ def test_the_github_workflow(tmp_path):
     _assert_every_shard_merged(done.stdout, folder)
 
 
+def k8s_documents() -> dict[str, dict]:
+    """The manifests of the Kubernetes recipe by kind."""
+    return {doc["kind"]: doc for doc in yaml.safe_load_all((RECIPES / "k8s-indexed-job.yaml").read_text())}
+
+
+def test_the_kubernetes_manifests_validate_against_the_kubernetes_schema():
+    import kubernetes_validate
+
+    documents = k8s_documents()
+    assert sorted(documents) == ["Job", "PersistentVolumeClaim", "Secret"]
+    for document in documents.values():
+        kubernetes_validate.validate(document, kubernetes_validate.latest_version(), strict=True)
+    job = documents["Job"]["spec"]["template"]["spec"]
+    assert job["volumes"][0]["persistentVolumeClaim"]["claimName"] == documents["PersistentVolumeClaim"]["metadata"]["name"]
+    secret = job["containers"][0]["env"][0]["valueFrom"]["secretKeyRef"]
+    assert secret == {"name": documents["Secret"]["metadata"]["name"], "key": "url"}
+    assert "url" in documents["Secret"]["stringData"]
+    broken = dict(documents["Job"], spec=dict(documents["Job"]["spec"], paralelism=4))   # the validator can fail
+    with pytest.raises(kubernetes_validate.ValidationError):
+        kubernetes_validate.validate(broken, kubernetes_validate.latest_version(), strict=True)
+
+
+def test_the_worker_image_installs_this_repository(tmp_path):
+    """The Job's image comes from docs/recipes/Containerfile, which installs the repository itself: it copies
+    every package pyproject.toml ships, and the wheel built from them carries the grammar and libraries."""
+    import zipfile
+
+    import tomllib
+
+    containerfile = (RECIPES / "Containerfile").read_text()
+    copied = set(re.findall(r"^COPY (\w+) /src/\1$", containerfile, re.MULTILINE))
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    shipped = {name.rstrip("*") for name in project["tool"]["setuptools"]["packages"]["find"]["include"]}
+    assert copied == shipped
+    assert "pip install --no-cache-dir /src" in containerfile and "USER 1000" in containerfile
+    assert k8s_documents()["Job"]["spec"]["template"]["spec"]["containers"][0]["image"].endswith(
+        "/scenario-coverage:0.1.0")
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w",
+                            str(tmp_path), str(ROOT)], capture_output=True, text=True, timeout=300)
+    assert built.returncode == 0, built.stderr
+    (wheel,) = tmp_path.glob("scenario_coverage-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert "coverage_engine/parse/grammar.lark" in names and "coverage_engine/osc/types.osc" in names
+    assert {f"executor/simulations/{lib}/lib_osc/{lib}.osc" for lib in ("ros", "nav2", "gazebo", "pybullet")} <= names
+
+
 def test_the_kubernetes_workers_share_one_postgresql_store(tmp_path, pg_url):
-    manifest = yaml.safe_load((RECIPES / "k8s-indexed-job.yaml").read_text())
-    spec = manifest["spec"]
+    spec = k8s_documents()["Job"]["spec"]
     container = spec["template"]["spec"]["containers"][0]
-    command = container["args"][0].split("&&", 1)[1].strip()          # after the installation
+    command = container["args"][0]
+    assert not INSTALL.search(command) and command.startswith("scenario_batch_execution worker")
     folder = seeded(tmp_path)
     assert shell("scenario_variation examples/coverage/cut_in.osc --strategy pairwise --seed 1 -o out",
                  folder).returncode == 0

@@ -39,7 +39,10 @@ def artifacts() -> Path:
 
 def test_the_html_report_opens_offline_and_shows_grades_heat_maps_and_links(child_batch, tmp_path):
     if not os.path.exists(CHROMIUM):
-        pytest.fail(f"no Chromium at {CHROMIUM} (apt-get install chromium; .ci/run does)")
+        reason = f"no Chromium at {CHROMIUM} (apt-get install chromium; .ci/run does)"
+        if os.environ.get("CI"):
+            pytest.fail(reason)           # CI installs it: a missing browser there is a failure
+        pytest.skip(reason)
     sync_playwright = _playwright()
     page_file = child_batch.root / "site" / "coverage.html"
     done = coverage("html", "results", "-o", str(page_file), cwd=child_batch.root)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -62,12 +63,29 @@ def test_parameter_override_and_sweep(tmp_path):
     assert (tmp_path / "out/parameter_override-0").is_dir() and (tmp_path / "out/fast_run").is_dir()
 
 
-def test_step_based_simulation_runs_faster_than_real_time():
+#: Loaded into the child through PYTHONPATH: adds up every ``time.sleep`` the run asks for and writes the
+#: sum when it exits, so "nothing sleeps" is checked by what the process did, not by a wall-clock bound
+#: that a loaded machine could miss.
+SLEEP_COUNTER = """
+import atexit, os, time
+_asked = [0.0]
+_sleep = time.sleep
+def _counting(seconds):
+    _asked[0] += seconds
+    _sleep(seconds)
+time.sleep = _counting
+atexit.register(lambda: open(os.environ["SLEPT_FILE"], "w").write(repr(_asked[0])))
+"""
+
+
+def test_step_based_simulation_runs_faster_than_real_time(tmp_path):
     folder = EXAMPLES / "simulation"
-    started = time.monotonic()
-    done = run_cli("falling_ball.osc", "--simulation", "falling_ball.py:FallingBall", cwd=folder)
+    (tmp_path / "sitecustomize.py").write_text(SLEEP_COUNTER)
+    slept = tmp_path / "slept"
+    env = {"PYTHONPATH": os.pathsep.join([str(tmp_path), str(folder)]), "SLEPT_FILE": str(slept)}
+    done = run_cli("falling_ball.osc", "--simulation", "falling_ball.py:FallingBall", cwd=folder, env=env)
     assert done.returncode == 0, done.stdout
-    assert time.monotonic() - started < 1.5  # 1.5 s of simulated time, no sleeping
+    assert float(slept.read_text()) < 0.01  # 1.5 s of simulated time, no sleeping (the wall clock would ask 1.5 s)
     assert in_order(done.stdout, "SIM reset: height=10.0", "dropping the ball", "1.5 s of simulated time",
                     "SIM shutdown after 1501 steps")
 

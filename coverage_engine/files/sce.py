@@ -199,6 +199,30 @@ def _declared_scenarios(model: str) -> list[str]:
     return re.findall(r"^scenario[ \t]+([A-Za-z_][\w.]*)", model, re.MULTILINE)
 
 
+#: The first item of the reference's ``.sce``: its ``scenario_variation`` writes ``#<path>==<value>`` comment lines,
+#: then a YAML list of its model tree, one single-key mapping per declaration (``- PhysicalTypeDeclaration:``).
+_REFERENCE_ITEM = re.compile(r"- [A-Z][A-Za-z]*(?:Declaration|Directive|Extension|Inherits)\b")
+
+
+def _reference_sce_line(text: str) -> int:
+    """The line of the reference's first model item when ``text`` is a ``.sce`` the reference wrote, else 0.
+
+    Only the head is read: its comment lines (``#CompilationUnit.…``) and the first line after them.
+    """
+    for number, line in enumerate(text.split("\n", 200)[:200], start=1):
+        if line.startswith("#") or not line.strip():
+            continue
+        return number if _REFERENCE_ITEM.match(line) else 0
+    return 0
+
+
+def _reference_sce(path: str, line: int) -> SceFormatError:
+    return SceFormatError(
+        "written by the reference's scenario_variation (a YAML dump of its model tree), which this tool does not "
+        "run: regenerate the variants from the .osc with our scenario_variation, which reads the same "
+        "'keep(... in [...])'", Location(path, line, 1))
+
+
 def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     """Read the text of a ``.sce`` file; ``source_dir`` is made absolute against ``path``'s folder.
 
@@ -211,6 +235,9 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
         raise _truncated(text, path)
     data = load_plain(text)                 # the shape our writer gives, without YAML (None: anything else)
     if data is None:
+        reference = _reference_sce_line(text)
+        if reference:
+            raise _reference_sce(path, reference)
         data = _load_yaml(text, path)
     where = Location(path, 1, 1)
     if not isinstance(data, dict):

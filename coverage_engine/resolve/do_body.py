@@ -23,7 +23,7 @@ from coverage_engine.resolve import model
 from coverage_engine.resolve.keeps import KeepCheck, check_keep, classify_keep
 from coverage_engine.resolve.operations import bind_arguments, coerce, struct_value
 from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
-from coverage_engine.resolve.types import ANY, BOOL, CompoundType, PhysicalType, is_numeric
+from coverage_engine.resolve.types import ANY, BOOL, CompoundType, ListType, PhysicalType, is_numeric
 from coverage_engine.resolve.values import apply_nested_keeps, instantiate, resolve_expression
 
 
@@ -98,7 +98,7 @@ def apply_modifiers(behavior: model.Behavior, modifiers: list[syntax.ModifierInv
                                f"{what}, argument '{name}'")
             elif fdecl.default is not None:
                 value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
-                               fdecl.location, f"{what}, parameter '{name}'")
+                               fdecl.location, f"{what}, parameter '{name}'", unit_required=True)
             else:
                 raise ArgumentError(f"{what}: missing argument '{name}'", invocation.location)
             if not value.is_const:
@@ -118,7 +118,7 @@ def _check_modifier_arguments(name: str, arguments: dict[str, object], invocatio
         raise ArgumentError(f"retry({count}): the count of permitted failures cannot be negative",
                             invocation.location)
     duration = arguments.get("duration")
-    if name == "timeout" and isinstance(duration, float) and not (0 < duration < math.inf):
+    if name == "timeout" and isinstance(duration, (int, float)) and not (0 < duration < math.inf):
         raise ArgumentError(f"timeout({duration} s): the duration must be a positive time", invocation.location)
 
 
@@ -203,12 +203,15 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         elif name in keeps:
             keep = keeps[name]
             value = coerce(resolve_expression(keep.value, scope, fdecl.type), fdecl.type, keep.location,
-                           f"{what}, parameter '{name}'", lenient_string=True)
+                           f"{what}, parameter '{name}'", lenient_string=True, unit_required=True)
         elif fdecl.default is not None:
             value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
-                           fdecl.location, f"{what}, parameter '{name}'")
+                           fdecl.location, f"{what}, parameter '{name}'", unit_required=True)
         elif name in nested and isinstance(fdecl.type, CompoundType):
             value = instantiate(scope.ctx, fdecl.type, {}, [], scope.ctx.fresh_path(name), node.location)
+        elif isinstance(fdecl.type, ListType):
+            # a list left out is empty, as the reference passes it (ros_launch(...) without its arguments)
+            value = TypedExpr(model.Const([]), fdecl.type, True)
         else:
             raise ArgumentError(f"{what}: missing argument '{name}'", node.location)
         if name in nested:        # partial overrides merged into the value given, kept or defaulted

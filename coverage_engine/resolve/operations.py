@@ -1,7 +1,8 @@
 """What typed values allow: operators and their result types, member access, conversion, argument binding.
 
 Type rules: ``int``/``uint`` promote to ``float``; physical values add and compare only with the same
-physical type and scale by plain numbers; comparisons give ``bool``; ``and``/``or``/``not`` need
+physical type and scale by plain numbers; ``*`` and ``/`` of physical values give the declared physical
+type with the resulting SI exponents (``speed * time`` is a ``length``); comparisons give ``bool``; ``and``/``or``/``not`` need
 ``bool``. Anything else is an :class:`~coverage_engine.errors.OscTypeError` at the operator. Operators
 on constants are folded here (with the run-time evaluator's own operator table), so the model carries
 :class:`~coverage_engine.resolve.model.Const` wherever a value is known before the run.
@@ -11,6 +12,8 @@ values it has already resolved.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 from coverage_engine.errors import ArgumentError, NameLookupError, OscTypeError, ResolveError
 from coverage_engine.location import Location
@@ -65,8 +68,8 @@ def fold(op: str, operands: tuple[TypedExpr, ...], rtype: OscType, location: Loc
             raise ResolveError("division by zero", location) from exc
         except Exception as exc:  # noqa: BLE001 - the operand types were checked; report anything left
             raise OscTypeError(f"cannot apply '{op}': {exc}", location) from exc
-        if rtype is FLOAT or isinstance(rtype, PhysicalType):
-            value = float(value)
+        if rtype is FLOAT:
+            value = float(value)    # a physical result keeps its kind: 2 * 3s is 6, as the reference prints it
         return TypedExpr(model.Const(value), rtype, all(o.is_literal for o in operands))
     return TypedExpr(model.Operation(op, tuple(o.expr for o in operands), location), rtype, False)
 
@@ -111,15 +114,52 @@ def arithmetic_type(op: str, a: OscType, b: OscType) -> OscType | None:
     return None
 
 
+def exponents_of(op: str, a: OscType, b: OscType) -> dict[str, int] | None:
+    """The SI exponents of ``a op b`` for ``*`` and ``/`` where a physical value takes part (ASAM's unit
+    arithmetic: speed × time has m¹), or None for any other operator or operand.
+
+    A plain number counts as dimensionless, so ``1 / 2s`` has s⁻¹; an exponent that cancels is dropped.
+    """
+    if op not in ("*", "/"):
+        return None
+    sides = []
+    for side in (a, b):
+        if isinstance(side, PhysicalType):
+            sides.append(dict(side.exponents))
+        elif is_numeric(side):
+            sides.append({})
+        else:
+            return None
+    left, right = sides
+    sign = 1 if op == "*" else -1
+    combined = dict(left)
+    for base, power in right.items():
+        combined[base] = combined.get(base, 0) + sign * power
+    return {base: power for base, power in combined.items() if power}
+
+
+def physical_result(exponents: dict[str, int], types: Mapping[str, OscType]) -> OscType | None:
+    """The declared physical type with these SI exponents (``float`` when they all cancel), or None."""
+    if not exponents:
+        return FLOAT
+    for declared in types.values():
+        if isinstance(declared, PhysicalType) and dict(declared.exponents) == exponents:
+            return declared
+    return None
+
+
 def coerce(value: TypedExpr, target: OscType, location: Location, what: str,
-           lenient_string: bool = False) -> TypedExpr:
+           lenient_string: bool = False, unit_required: bool = False) -> TypedExpr:
     """``value`` made to fit ``target`` (int→float, list elements…) or an error saying what did not fit.
 
     A single value where a list is expected becomes a one-element list (``sub_struct("a")`` for a
     ``list of string`` member), as the reference implementation accepts it.
 
     With ``lenient_string`` any value may go where a string is declared (action arguments such as
-    ``log(msg)`` receive the value itself).
+    ``log(msg)`` receive the value itself). With ``unit_required`` a plain number is refused where a
+    physical value is declared (a parameter's default, a keep's value: ``t: time = 3`` is an error in the
+    reference too); elsewhere (constructor arguments such as ``position_3d(1.0, 2.0, 3.0)``) it is read in
+    SI base units, as the reference reads it.
     """
     src = value.type
     if target is ANY or src is ANY:
@@ -133,9 +173,13 @@ def coerce(value: TypedExpr, target: OscType, location: Location, what: str,
         return TypedExpr(model.MakeList((item.expr,)), target, False)
     literal = value.value if value.is_literal and value.is_const else None
     if isinstance(target, PhysicalType) and src in (INT, UINT, FLOAT) and isinstance(literal, (int, float)):
+        if unit_required:
+            raise OscTypeError(f"{what}: a {target} needs a unit (write {literal} followed by a unit of {target}); "
+                               "a plain number is read in SI base units only as a struct argument, e.g. "
+                               "position_3d(1.0, 2.0, 3.0)", location)
         # a plain number written for a physical quantity is in SI base units, as the reference
         # implementation reads it (its PyBullet example writes ``position_3d(z: 0.5)``)
-        return TypedExpr(model.Const(float(literal)), target, True)
+        return TypedExpr(model.Const(literal), target, True)
     if not assignable(src, target):
         raise OscTypeError(f"{what}: expected {target}, got {src}", location)
     if value.is_const and (target is FLOAT or target is UINT or isinstance(target, (PhysicalType, ListType))):

@@ -210,7 +210,8 @@ def convert(value: object, t: OscType, where: str = "value") -> object:
         raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
     if t is FLOAT or isinstance(t, PhysicalType):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
+            # a physical value keeps the kind it was written with (``2s`` is 2, ``100ms`` 0.1), as it prints
+            return float(value) if t is FLOAT else value
         raise ConversionError(f"{where}: expected {t.name}, got {_kind(value)}")
     if isinstance(t, EnumType):
         if isinstance(value, EnumValue) and value.name in t.members:

@@ -39,10 +39,12 @@ from coverage_engine.resolve.operations import (
     coerce,
     common_element,
     comparable,
+    exponents_of,
     fold,
     member_of,
     members_of,
     ordered,
+    physical_result,
     physical_value,
     struct_value,
 )
@@ -152,14 +154,24 @@ def _binary(expr: syntax.BinaryOp, scope: Scope) -> TypedExpr:
         _require(isinstance(rt, ListType), f"'in' needs a list on its right, got {rt}", expr.location)
         return fold(op, (left, right), BOOL, expr.location)
     if op in ("==", "!="):
-        _require(comparable(lt, rt), f"cannot compare {lt} with {rt}", expr.location)
+        # a variable an action fills (result_variable: result) holds whatever the action stored there, as in
+        # the reference, so it compares with any value
+        filled = isinstance(left.expr, model.VariableRef) or isinstance(right.expr, model.VariableRef)
+        _require(filled or comparable(lt, rt), f"cannot compare {lt} with {rt}", expr.location)
         return fold(op, (left, right), BOOL, expr.location)
     if op in ("<", "<=", ">", ">="):
         _require(ordered(lt, rt), f"cannot order {lt} and {rt} with '{op}'", expr.location)
         return fold(op, (left, right), BOOL, expr.location)
     rtype = arithmetic_type(op, lt, rt)
     if rtype is None:
-        raise OscTypeError(f"operator '{op}' cannot combine {lt} and {rt}", expr.location)
+        exponents = exponents_of(op, lt, rt)
+        if exponents is None:
+            raise OscTypeError(f"operator '{op}' cannot combine {lt} and {rt}", expr.location)
+        rtype = physical_result(exponents, scope.ctx.namespace.types)
+        if rtype is None:
+            si = ", ".join(f"{base}: {power}" for base, power in exponents.items())
+            raise OscTypeError(f"operator '{op}' of {lt} and {rt} gives SI({si}), and no physical type with these "
+                               "exponents is declared (declare one: 'type NAME is SI(...)')", expr.location)
     return fold(op, (left, right), rtype, expr.location)
 
 
@@ -346,7 +358,8 @@ def _kept_value(ctype: CompoundType, name: str, mtype: OscType, given: TypedExpr
     hard = [k for k in keeps if not k.is_default]
     chosen = given
     for keep in hard:
-        value = coerce(resolve_expression(keep.value, keep.scope, mtype), mtype, keep.location, f"keep of '{name}'")
+        value = coerce(resolve_expression(keep.value, keep.scope, mtype), mtype, keep.location, f"keep of '{name}'",
+                       unit_required=True)
         if chosen is not None and chosen.is_const and value.is_const and chosen.value != value.value:
             raise ResolveError(f"contradicting constraints on '{ctype.name}.{name}': {chosen.value!r} and "
                                f"{value.value!r}", keep.location)
@@ -357,7 +370,7 @@ def _kept_value(ctype: CompoundType, name: str, mtype: OscType, given: TypedExpr
         if soft:
             keep = soft[-1]
             chosen = coerce(resolve_expression(keep.value, keep.scope, mtype), mtype, keep.location,
-                            f"keep of '{name}'")
+                            f"keep of '{name}'", unit_required=True)
     return chosen
 
 
@@ -385,10 +398,11 @@ def _field_value(ctx: ResolveContext, ftype: OscType, default: syntax.Expression
     if whole:
         # ``p: T with: keep(it == v)`` gives the value itself; the last such keep wins over the default.
         keeps = [k for k in keeps if k.path]
-        value = coerce(resolve_expression(whole[-1].value, whole[-1].scope, ftype), ftype, whole[-1].location, what)
+        value = coerce(resolve_expression(whole[-1].value, whole[-1].scope, ftype), ftype, whole[-1].location, what,
+                       unit_required=True)
         return apply_nested_keeps(ctx, value, keeps, key, location) if keeps else value
     if default is not None:
-        value = coerce(resolve_expression(default, scope, ftype), ftype, default.location, what)
+        value = coerce(resolve_expression(default, scope, ftype), ftype, default.location, what, unit_required=True)
         if keeps:
             value = apply_nested_keeps(ctx, value, keeps, key, location)
         return value
@@ -413,7 +427,7 @@ def apply_nested_keeps(ctx: ResolveContext, value: TypedExpr, keeps: list[KeepVa
             raise NameLookupError(f"'{ctype.name}' has no member '{head}'", keep.location)
         if len(keep.path) == 1:
             new = resolve_expression(keep.value, keep.scope, fdecl.type)
-            members[head] = coerce(new, fdecl.type, keep.location, f"keep of '{head}'")
+            members[head] = coerce(new, fdecl.type, keep.location, f"keep of '{head}'", unit_required=True)
         else:
             sub = KeepValue(keep.path[1:], keep.value, keep.scope, keep.location, keep.is_default)
             members[head] = apply_nested_keeps(ctx, members[head], [sub], f"{key}.{head}", location)
@@ -474,7 +488,7 @@ def external_method(ctx: ResolveContext, decl: syntax.MethodDecl, owner: Compoun
         default = None
         if p.default is not None:
             default = coerce(resolve_expression(p.default, scope, ptype), ptype, p.default.location,
-                             f"default of '{p.name}'").expr
+                             f"default of '{p.name}'", unit_required=True).expr
         params.append((p.name, ptype.name, default))
     return_type = ctx.namespace.lookup_type(decl.return_type).name if decl.return_type is not None else None
     method = model.ExternalMethod(f"{owner.name}.{decl.name}", ".".join(parts[:-1]), parts[-1], tuple(params),

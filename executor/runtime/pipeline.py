@@ -33,7 +33,8 @@ class ExecutionRequest:
     def __init__(self, scenario: str, output_dir: str | None = None, dry_run: bool = False,
                  log_model: bool = False, debug: bool = False, live_tree: bool = False, dot: bool = False,
                  step_duration: float = 0.1, parameter_file: str | None = None, create_template: bool = False,
-                 post_run: tuple[str, ...] = (), simulation: str | None = None, per_scenario: bool = False) -> None:
+                 post_run: tuple[str, ...] = (), simulation: str | None = None, per_scenario: bool = False,
+                 bt_log: bool = False, tick_log: bool = False) -> None:
         self.scenario = scenario
         self.output_dir = output_dir
         self.dry_run = dry_run
@@ -47,12 +48,17 @@ class ExecutionRequest:
         self.post_run = tuple(post_run)
         self.simulation = simulation
         self.per_scenario = per_scenario
+        self.bt_log = bt_log
+        self.tick_log = tick_log
 
 
 def _check_options(request: ExecutionRequest) -> None:
     step = request.step_duration
     if isinstance(step, bool) or not isinstance(step, (int, float)) or not math.isfinite(step) or step <= 0:
         raise UsageProblem(f"--step-duration must be a positive, finite number of seconds, got {step!r}")
+    for flag, asked in (("--bt-log", request.bt_log), ("--tick-log", request.tick_log)):
+        if asked and not request.output_dir and not request.dry_run:
+            raise UsageProblem(f"{flag} writes into the output folder: give --output-dir")
     if not request.post_run:
         return
     import shutil
@@ -248,7 +254,8 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     options = SessionOptions(tick_period=request.step_duration, simulation=simulation, input_dir=scenario_dir,
                              output_root=output_root, debug=request.debug,
                              observer_factory=live.observers if live else None,
-                             on_result=report.update if report else None, origin=origin)
+                             on_result=report.update if report else None, origin=origin,
+                             scenario_file=request.scenario, bt_log=request.bt_log, tick_log=request.tick_log)
     try:
         outcome = run_session(runs, options, logger)
     finally:

@@ -40,7 +40,8 @@ class SessionOptions:
                  output_root: str | None = None, observer_factory: Callable[[str], list] | None = None,
                  debug: bool = False,
                  on_result: Callable[[list[ScenarioResult]], object] | None = None,
-                 origin: RunOrigin | None = None) -> None:
+                 origin: RunOrigin | None = None, scenario_file: str | None = None, bt_log: bool = False,
+                 tick_log: bool = False) -> None:
         self.tick_period = tick_period
         self.simulation = simulation
         self.input_dir = input_dir
@@ -49,6 +50,9 @@ class SessionOptions:
         self.debug = debug
         self.on_result = on_result
         self.origin = origin                 # the file run, for each run's coverage.json
+        self.scenario_file = scenario_file   # named in behaviors.jsonl
+        self.bt_log = bt_log                 # --bt-log: behaviors.jsonl in each run's folder
+        self.tick_log = tick_log             # --tick-log: tick_timing.csv and action_timing.csv there
 
 
 class SessionOutcome:
@@ -136,9 +140,10 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                     logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
                     simulation=simulation, origin=options.origin)
                 observers = options.observer_factory(run.name) if options.observer_factory else []
-                runner = ScenarioRunner(run.scenario, context, name=run.name,
-                                        tick_period=sim_clock.dt if sim_clock is not None else options.tick_period,
-                                        simulation=simulation, observers=observers)
+                period = sim_clock.dt if sim_clock is not None else options.tick_period
+                runner = ScenarioRunner(run.scenario, context, name=run.name, tick_period=period,
+                                        simulation=simulation, observers=observers,
+                                        recorders=_recorders(options, context, run.name, period, logger))
                 try:
                     results.append(runner.run())
                     if context.coverage is not None:
@@ -164,6 +169,28 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
         results.extend(ScenarioResult(r.name, False, NOT_STARTED, output_dir=r.output_dir, skipped=True)
                        for r in runs if r.name not in recorded)
     return outcome
+
+
+def _recorders(options: SessionOptions, context: ScenarioContext, name: str, period: float,
+               logger: Logger) -> list:
+    """The ``--bt-log``/``--tick-log`` recorders of one run, announced in the log (none unless asked for)."""
+    if not (options.bt_log or options.tick_log) or not context.output_dir:
+        return []
+    from executor.runtime.recording import ACTION_TIMING, BEHAVIOUR_LOG, TICK_TIMING, recorders
+
+    folder = context.output_dir
+    try:
+        found = recorders(folder, context.clock, name, options.scenario_file, period, options.bt_log,
+                          options.tick_log)
+    except OSError as exc:       # e.g. a link planted under the name: the run goes on without its records
+        logger.error(f"Scenario '{name}': cannot record into {folder}: {exc.strerror or exc}")
+        return []
+    if options.bt_log:
+        logger.info(f"Recording behaviour tree status to {os.path.join(folder, BEHAVIOUR_LOG)}")
+    if options.tick_log:
+        logger.info(f"Recording tick timing to {os.path.join(folder, TICK_TIMING)} and action timing to "
+                    f"{os.path.join(folder, ACTION_TIMING)}")
+    return found
 
 
 def _write_coverage(context: ScenarioContext, result: ScenarioResult, logger: Logger) -> None:

@@ -24,6 +24,7 @@ from executor.actions.base import ActionError
 from executor.results import ScenarioResult
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
+from executor.runtime.recording import Recorder
 from executor.simulation import SimulationClock, SimulationError, SimulationStepError
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]
@@ -72,7 +73,8 @@ class ScenarioRunner:
 
     def __init__(self, scenario: Scenario, context: ScenarioContext, *, name: str | None = None,
                  tick_period: float = 0.1, simulation=None, observers: list[TickObserver] | None = None,
-                 setup_kwargs: dict | None = None, skip_idle_ticks: bool = True) -> None:
+                 setup_kwargs: dict | None = None, skip_idle_ticks: bool = True,
+                 recorders: list[Recorder] | None = None) -> None:
         self.scenario = scenario
         self.context = context
         self.name = name or scenario.name
@@ -84,6 +86,8 @@ class ScenarioRunner:
         self.ticks = 0
         #: step-based mode: do not tick while only waits run (see executor.runtime.quiescence)
         self.skip_idle_ticks = skip_idle_ticks
+        #: --bt-log / --tick-log (executor.runtime.recording); empty unless asked for
+        self.recorders = recorders or []
 
     # -- phases ------------------------------------------------------------------------------------
 
@@ -97,6 +101,8 @@ class ScenarioRunner:
                                                origin=context.origin)
         self.root = build_tree(self.scenario, context)
         self.root.name = self.name
+        for recorder in self.recorders:     # before setup, so the actions' own setup is timed
+            recorder.started(self.root)
         kwargs = dict(self.setup_kwargs, logger=context.logger, input_dir=context.input_dir,
                       output_dir=context.output_dir, clock=context.clock, context=context,
                       tick_period=self.tick_period)
@@ -126,7 +132,15 @@ class ScenarioRunner:
 
     def _tick(self, root, observers) -> bool:
         """Tick the tree once and show it to the observers; True when the tree has finished."""
-        root.tick_once()
+        recorders = self.recorders
+        if recorders:
+            for recorder in recorders:
+                recorder.before_tick()
+            root.tick_once()
+            for recorder in recorders:
+                recorder.after_tick(root)
+        else:
+            root.tick_once()
         self.ticks += 1
         for observe in observers:
             observe(root)
@@ -218,6 +232,8 @@ class ScenarioRunner:
             if not result.passed and self.root is not None and ticking:
                 result.output = snapshot(self.root)
             self._teardown()
+            for recorder in self.recorders:
+                recorder.close()
         if self.context.coverage is not None and ticking and not result.aborted:
             try:
                 self.context.coverage.finish(result.passed)

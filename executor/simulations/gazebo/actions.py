@@ -126,3 +126,22 @@ class WaitForSim(WorldAction):
         self.lease.catch_up()
         NavigationWorld.of(self.lease)
         return Status.SUCCESS
+
+
+class SpawnMultiple(WorldAction):
+    """``spawn_multiple(entities)``: every ``spawn_entity`` of the list, each named by its ``entity_name``."""
+
+    def __init__(self) -> None:
+        super().__init__(None)
+        self.entities: list[dict[str, Any]] = []
+
+    def execute(self, entities: list[dict[str, Any]], world_name: str = "default") -> None:
+        self.entities = list(entities)
+
+    def update(self) -> Status:
+        self.lease.catch_up()
+        for entity in self.entities:
+            position, orientation = entity["spawn_pose"]["position"], entity["spawn_pose"]["orientation"]
+            spawn(self, entity["entity_name"], entity["model"], position["x"], position["y"], position["z"],
+                  orientation["yaw"])
+        return Status.SUCCESS

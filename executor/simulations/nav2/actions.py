@@ -46,7 +46,8 @@ class InitNav2(WorldAction):
         self.arguments: dict[str, Any] = {}
 
     def execute(self, initial_pose: dict[str, Any], base_frame_id: str = "base_link", use_initial_pose: bool = True,
-                namespace_override: str = "", wait_for_initial_pose: bool = False) -> None:
+                namespace_override: str = "", wait_for_initial_pose: bool = False, wait_for_amcl: bool = True) -> None:
+        """``wait_for_amcl`` is accepted: the simulated localisation is ready as soon as navigation is up."""
         self.arguments = {"initial_pose": initial_pose, "use_initial_pose": use_initial_pose,
                           "namespace": namespace_of(self.actor, namespace_override),
                           "wait_for_initial_pose": wait_for_initial_pose}
@@ -131,5 +132,19 @@ class NavThroughPoses(_Navigate):
         if not goal_poses:
             raise ActionError("goal_poses is empty")
         self.poses = [pose_2d(p) for p in goal_poses]
+        self.success_on_acceptance = success_on_acceptance
+        self.goal = None
+
+
+class FollowWaypoints(_Navigate):
+    """``robot.follow_waypoints(goal_poses, loop_count, ...)``: through the poses, ``loop_count`` more times again."""
+
+    def execute(self, goal_poses: list, loop_count: int = 0, namespace_override: str = "",
+                action_topic: str = "follow_waypoints", success_on_acceptance: bool = False) -> None:
+        if not goal_poses:
+            raise ActionError("goal_poses is empty")
+        if loop_count < 0:
+            raise ActionError(f"loop_count is {loop_count}: it counts the extra rounds, 0 or more")
+        self.poses = [pose_2d(p) for p in goal_poses] * (loop_count + 1)
         self.success_on_acceptance = success_on_acceptance
         self.goal = None

@@ -32,7 +32,7 @@ class TfCloseTo(WorldAction):
         self.ground_truth = False
 
     def execute(self, threshold: float, reference_point: Mapping[str, Any], robot_frame_id: str = "base_link",
-                sim: bool = False, namespace_override: str = "") -> None:
+                sim: bool = False, namespace_override: str = "", parent_frame_id: str = "map") -> None:
         self.threshold = threshold
         self.point = (float(reference_point["x"]), float(reference_point["y"]))
         self.ground_truth = robot_frame_id.endswith("_gt")

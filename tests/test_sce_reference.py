@@ -65,7 +65,8 @@ def test_the_batch_reports_one_testcase_per_reference_file_and_runs_the_others(t
     assert sorted(cases) == ["fine", "log1"]
     assert len(cases["fine"]) == 0                                    # passed
     problem = cases["log1"].find("failure")
-    assert problem is not None and problem.get("message", "").startswith("written by the reference's scenario_variation")
+    assert problem is not None and problem.get("message", "").startswith(
+        f"{tmp_path / 'in' / 'log1.sce'}:2:1: error: written by the reference's scenario_variation")   # located
 
 
 def test_the_pytest_plugin_fails_the_item_with_the_same_line(tmp_path):

@@ -55,12 +55,11 @@ def test_the_gitlab_recipe(tmp_path):
         done = shell(line, folder)
         assert done.returncode == 0, line + "\n" + done.stdout + done.stderr
     assert (folder / "coverage.html").stat().st_size > 1000
-    _assert_every_shard_merged(done.stdout, folder)
+    _assert_every_shard_merged(done.stdout, len(list((folder / "out").glob("*.sce"))))
 
 
-def _assert_every_shard_merged(report: str, folder: Path) -> None:
+def _assert_every_shard_merged(report: str, variants: int) -> None:
     """The recipe's last line is the plain report of the merged shards: complete, every variant counted."""
-    variants = len(list((folder / "out").glob("*.sce")))
     head = report.splitlines()[0]
     assert head.endswith("[complete]") and f": {variants} run(s)" in head, report
     assert "INCOMPLETE" not in report
@@ -80,11 +79,17 @@ def test_the_github_workflow(tmp_path):
         for line in runs("run"):
             done = shell(line.replace("${{ matrix.shard }}", str(shard)), folder)
             assert done.returncode in (0, 1), done.stdout + done.stderr
+    variants = len(list((folder / "out").glob("*.sce")))
+    shutil.rmtree(folder / "out")                   # the coverage job downloads the results only
     for line in runs("coverage"):
         done = shell(line, folder)
         assert done.returncode == 0, line + "\n" + done.stdout + done.stderr
     assert runs("coverage")[-1].startswith("scenario_coverage report results --fail-under")
-    _assert_every_shard_merged(done.stdout, folder)
+    assert f": {variants} run(s)" in done.stdout.splitlines()[0]
+    for shard in jobs["run"]["strategy"]["matrix"]["shard"]:      # what the variation declared travels along
+        declared = (folder / "results" / f"shard-{shard}" / "declared.json").read_text(encoding="utf-8")
+        assert '"key": "cut_in.ego_speed", "values": ["30kph", "50kph", "70kph", "90kph"]' in declared
+    _assert_every_shard_merged(done.stdout, variants)
 
 
 def k8s_documents() -> dict[str, dict]:

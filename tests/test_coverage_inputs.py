@@ -207,3 +207,14 @@ def test_a_folder_named_twice_is_counted_once(tmp_path):
     _batch(tmp_path, "out", "results")
     done = coverage("report", "results", "./results", cwd=tmp_path)
     assert done.stdout.splitlines()[0] == "Scenario coverage of results: 6 run(s) (6 passed)  [complete]"
+
+
+def test_the_results_folder_alone_knows_the_declared_values(tmp_path):
+    """A CI job that downloads only the results (no .sce files): the batch's declared.json is enough."""
+    _vary(tmp_path, "lanes", LANES)
+    _batch(tmp_path, "out", "results", "--shard", "1/3")
+    declared = json.loads((tmp_path / "results" / "declared.json").read_text(encoding="utf-8"))
+    assert [d["key"] for d in declared["domains"]] == ["road_test.lanes", "road_test.surface"]
+    shutil.rmtree(tmp_path / "out")
+    lanes = _items(tmp_path, "results")["input:road_test.lanes"]
+    assert [b["label"] for b in lanes["buckets"]] == ["1", "2", "3"]

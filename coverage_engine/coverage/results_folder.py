@@ -26,7 +26,13 @@ from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import HEADER_CHARS, InputDomain, header_domains
+from coverage_engine.files.sce_domains import (
+    DECLARED_FILE,
+    HEADER_CHARS,
+    InputDomain,
+    header_domains,
+    read_declared,
+)
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
 REPORT_FILE = "test.xml"
@@ -243,6 +249,7 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
     root = given.resolve()
     reader = _Reader(root)
     source = RunSource(label=str(given), runs=iter(()), root=str(root))
+    source.declare(read_declared(str(root / DECLARED_FILE)))     # the batch's record; .sce headers add to it
     report = reader.file(root, REPORT_FILE)
     if report is None and reader.file(root, RUN_FILE) is None:
         shards = _shards(root)

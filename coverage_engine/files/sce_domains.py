@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -175,6 +176,40 @@ def read_domains(lines: Iterable[str]) -> list[InputDomain]:
         if domain is not None:
             found.append(domain)
     return found
+
+
+#: The file a batch leaves beside its merged ``test.xml``: what the variations of its variants declared,
+#: so the results folder is reported right where the ``.sce`` files are not (a CI job with only the results).
+DECLARED_FILE = "declared.json"
+
+#: Largest ``declared.json`` read.
+MAX_DECLARED_BYTES = 16 * 1024 * 1024
+
+
+def declared_text(domains: Iterable[InputDomain]) -> str:
+    """The text of a ``declared.json``: one domain line's JSON per parameter, in a list."""
+    lines = [line[len(DOMAIN_PREFIX):].rstrip("\n") for line in map(domain_line, domains) if line]
+    return '{"format": "scenario-coverage/declared", "domains": [\n ' + ",\n ".join(lines) + "\n]}\n"
+
+
+def read_declared(path: str) -> list[InputDomain]:
+    """The domains of a ``declared.json`` ([] when it is missing, too big or not one); never follows a link."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+    except OSError:
+        return []
+    with os.fdopen(fd, "rb") as handle:
+        data = handle.read(MAX_DECLARED_BYTES + 1)
+    if len(data) > MAX_DECLARED_BYTES:
+        return []
+    try:
+        document = json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError):
+        return []
+    if not isinstance(document, dict) or document.get("format") != "scenario-coverage/declared" \
+            or not isinstance(document.get("domains"), list):
+        return []
+    return [d for d in map(_domain, document["domains"]) if d is not None]
 
 
 def header_domains(text: str) -> list[InputDomain]:

@@ -16,6 +16,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from coverage_engine.coverage.atomic import write_text_atomically
+from coverage_engine.files.sce_domains import DECLARED_FILE, InputDomain, declared_text, header_domains
 from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
@@ -27,6 +29,7 @@ from executor.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState
+from store.variant_lookup import VariantInfo
 
 REPORT_FILE = "test.xml"
 
@@ -296,9 +299,23 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
     try:
         write_report(path, xml_text)
+        write_declared(Path(path).parent, variants.values())
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
     return folder_history.counts_of(listed)
+
+
+def write_declared(folder: Path, variants: Iterable[VariantInfo]) -> None:
+    """Leave ``declared.json`` beside the merged report: what the variations of the batch's variants
+    declared (their ``.sce`` headers, one per variation run), so the results folder alone is enough for
+    ``scenario_coverage`` to report every declared value, also where the ``.sce`` files are not."""
+    declared: dict[str, InputDomain] = {}
+    for header in {variant.header for variant in variants if variant.header}:
+        for domain in header_domains(header):
+            known = declared.get(domain.key)
+            declared[domain.key] = domain if known is None else known.merged(domain)
+    if declared:
+        write_text_atomically(folder / DECLARED_FILE, declared_text(declared.values()))
 
 
 #: Exit code of a batch that did not pass, or could not go on (a full disk).

@@ -129,7 +129,7 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
                 plain=True)
     text = "".join(line.rstrip() + "\n" for line in buffer.getvalue().splitlines())   # no padding in files and logs
     if output:
-        from coverage_engine.coverage.atomic import write_text_atomically
+        from coverage_engine.results.atomic import write_text_atomically
 
         write_text_atomically(_output_path(output), text)
     else:
@@ -144,7 +144,7 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
 def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
-    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.results.atomic import write_text_atomically
     from coverage_engine.coverage.render_html import render_html
 
     path = _output_path(output)
@@ -164,7 +164,7 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
-    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.results.atomic import write_text_atomically
     from coverage_engine.coverage.render_json import render_json
 
     report = _report(results, store_url, batch_id, plan_file)

@@ -35,7 +35,7 @@ IMPORTED_IN = os.getpid()
 def record(name, pause):
     CALLS.append(name)
     time.sleep(pause)
-    import executor.junit as junit
+    import coverage_engine.results.run_report as junit
     leaked = getattr(junit, "LEAKED_BY", "-")
     junit.LEAKED_BY = name                      # global state a later job must never see
     line = "%s %d %d %d %d %s\\n" % (name, os.getpid(), os.getppid(), IMPORTED_IN, len(CALLS), leaked)

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from tests_schema import assert_valid
 
 from executor.batch.junit_merge import merged_report
-from executor.junit import write_report
+from coverage_engine.results.run_report import write_report
 from store.jobs import Job
 from store.states import JobState
 from store.variant_lookup import VariantInfo

@@ -11,8 +11,8 @@ from runtime_models import log, parameter, scenario, serial, wait_elapsed
 
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.resolve import model as m
-from executor.junit import ReportWriter, parse_error_result, write_grouped, write_results
-from executor.results import ScenarioResult
+from coverage_engine.results.run_report import ReportWriter, parse_error_result, write_grouped, write_results
+from coverage_engine.results.scenario_result import ScenarioResult
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun, plan_runs, split_output_dirs
 from executor.runtime.session import SessionOptions, run_session

@@ -22,7 +22,7 @@ from pathlib import Path
 import yaml
 
 from coverage_engine.coverage.errors import ResultsError, RunFileError, location
-from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites, run_verdict
+from coverage_engine.results.verdicts import JunitUnreadable, iter_suites, run_verdict
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource

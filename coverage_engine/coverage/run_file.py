@@ -29,7 +29,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from coverage_engine.coverage.atomic import write_text_atomically
+from coverage_engine.results.atomic import write_text_atomically
 from coverage_engine.coverage.errors import RunFileError, location
 from coverage_engine.coverage.json_positions import line_column, locate
 from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: the file's public records

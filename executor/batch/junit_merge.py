@@ -1,7 +1,7 @@
 """The merged JUnit report of a batch: one testsuite per job, one testcase per scenario the job ran.
 
 Each suite is named after the job's file and holds the child's testcases; the document follows
-Jenkins' ``junit-10.xsd`` (:mod:`executor.junit_document`). Names follow :mod:`executor.junit_names`:
+Jenkins' ``junit-10.xsd`` (:mod:`coverage_engine.results.document`). Names follow :mod:`coverage_engine.results.names`:
 a child that reported one testcase has it named after the job (classname: the source scenario, name:
 the variant with its varied values), whatever happened to the job; several testcases keep their names.
 
@@ -26,10 +26,10 @@ from pathlib import Path
 from sqlalchemy import Engine
 
 from coverage_engine.files.sce_domains import HEADER_CHARS
-from executor.batch.junit_read import JunitUnreadable, read_cases
-from executor.junit import failure_text, iso_timestamp
-from executor.junit_document import Case, document, suite_element
-from executor.junit_names import declared_scenarios, drawn_units, scenario_classname, variant_name
+from coverage_engine.results.read import JunitUnreadable, read_cases
+from coverage_engine.results.run_report import failure_text, iso_timestamp
+from coverage_engine.results.document import Case, document, suite_element
+from coverage_engine.results.names import declared_scenarios, drawn_units, scenario_classname, variant_name
 from store.jobs import Job
 from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
 from store.variant_lookup import VariantInfo, variant_infos
@@ -76,7 +76,7 @@ def _tail(text: str | None) -> str | None:
 
 @dataclass(frozen=True)
 class JobNames:
-    """The classname and name of a job's testcase (see :mod:`executor.junit_names`)."""
+    """The classname and name of a job's testcase (see :mod:`coverage_engine.results.names`)."""
 
     classname: str
     name: str

@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from coverage_engine.coverage.atomic import write_text_atomically
+from coverage_engine.results.atomic import write_text_atomically
 from coverage_engine.files.sce_domains import DECLARED_FILE, InputDomain, declared_text, header_domains
 from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
@@ -24,7 +24,7 @@ from executor.batch.inputs import Shard, check_command, discover, job_specs, not
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
-from executor.junit import write_report
+from coverage_engine.results.run_report import write_report
 from executor.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore

@@ -15,8 +15,8 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from executor.batch.junit_read import JunitUnreadable, clean_text, has_problem, read_cases
-from executor.junit_document import Case
+from coverage_engine.results.read import JunitUnreadable, clean_text, has_problem, read_cases
+from coverage_engine.results.document import Case
 from executor.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState

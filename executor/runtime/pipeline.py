@@ -143,7 +143,7 @@ def _located(exc: OscError, scenario: str) -> str:
 def report_names(scenario: str, runs=(), document=None):
     """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header,
     ``document`` when it was read already)."""
-    from executor.junit import report_names as names_for
+    from coverage_engine.results.run_report import report_names as names_for
 
     document = document or _variant(scenario)
     variant = (document.source, document.scenario, document.assignment,
@@ -182,7 +182,7 @@ def execute(request: ExecutionRequest) -> int:
         check_actions_available(s for scenario_file, _ in loaded for s in scenario_file.scenarios)
     except OscError as exc:
         if output_root and not request.dry_run:
-            from executor.junit import parse_error_result, write_results
+            from coverage_engine.results.run_report import parse_error_result, write_results
 
             write_results(output_root, [parse_error_result(request.scenario, _located(exc, request.scenario),
                                                            str(exc))], report_names(request.scenario))
@@ -229,8 +229,8 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
             simulation_dt(simulation)
         except SimulationError as exc:
             if output_root:  # CI sees that nothing ran, and why
-                from executor.junit import write_grouped
-                from executor.results import ScenarioResult
+                from coverage_engine.results.run_report import write_grouped
+                from coverage_engine.results.scenario_result import ScenarioResult
 
                 write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
                               output_root, request.per_scenario, names)
@@ -248,7 +248,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
         live = LiveTree()
     report = None
     if output_root:
-        from executor.junit import ReportWriter
+        from coverage_engine.results.run_report import ReportWriter
 
         report = ReportWriter(output_root, request.per_scenario, names)
     options = SessionOptions(tick_period=request.step_duration, simulation=simulation, input_dir=scenario_dir,

@@ -15,7 +15,7 @@ import signal
 from collections.abc import Callable
 from contextlib import contextmanager
 
-from executor.results import ScenarioResult
+from coverage_engine.results.scenario_result import ScenarioResult
 from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger

@@ -1,4 +1,4 @@
-"""Reading a child's JUnit XML safely (defusedxml) into :class:`~executor.junit_document.Case` records.
+"""Reading a child's JUnit XML safely (defusedxml) into :class:`~coverage_engine.results.document.Case` records.
 
 Children are any program, so their XML is untrusted: entity tricks are refused, counts are taken from
 the testcases themselves rather than from the (possibly wrong) totals attributes, and a time that is
@@ -10,7 +10,7 @@ from __future__ import annotations
 from defusedxml import ElementTree as SafeET
 from defusedxml.common import DefusedXmlException
 
-from executor.junit_document import Case, clean_text
+from coverage_engine.results.document import Case, clean_text
 
 __all__ = ["JunitUnreadable", "clean_text", "has_problem", "read_cases"]
 

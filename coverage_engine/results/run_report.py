@@ -1,7 +1,7 @@
 """Write ``test.xml`` for ``scenario_execution``: one testcase per executed scenario.
 
-The document follows Jenkins' ``junit-10.xsd`` (built by :mod:`executor.junit_document`) and names
-its suite and testcases by the scheme of :mod:`executor.junit_names`: the suite after the scenario
+The document follows Jenkins' ``junit-10.xsd`` (built by :mod:`coverage_engine.results.document`) and names
+its suite and testcases by the scheme of :mod:`coverage_engine.results.names`: the suite after the scenario
 file, each testcase's classname after its source scenario and its name after the run (for a variant,
 its file stem and varied values). A failed scenario carries its one-line reason as the failure
 message and at the head of the failure text, followed by the last tree snapshot; a scenario an abort
@@ -21,9 +21,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from executor.junit_document import Case, document, suite_element
-from executor.junit_names import file_stem, scenario_classname, variant_name
-from executor.results import ScenarioResult
+from coverage_engine.results.document import Case, document, suite_element
+from coverage_engine.results.names import file_stem, scenario_classname, variant_name
+from coverage_engine.results.scenario_result import ScenarioResult
 
 RESULT_FILE = "test.xml"
 
@@ -68,7 +68,7 @@ def iso_timestamp(epoch: float) -> str:
 
 @dataclass(frozen=True)
 class ReportNames:
-    """The names one scenario file's runs get in ``test.xml`` (see :mod:`executor.junit_names`).
+    """The names one scenario file's runs get in ``test.xml`` (see :mod:`coverage_engine.results.names`).
 
     ``cases`` maps a run name to its ``(classname, testcase name)``; a result without an entry (the
     file did not load) is named ``(classname, name)``.

@@ -100,7 +100,7 @@ def _typed_options() -> list[str]:
 
 def _check_post_run(hooks) -> None:
     """Each ``--post-run`` must split into a command line (an empty one would run the job folder)."""
-    from executor.hooks import split_hook
+    from executor.children.hooks import split_hook
 
     for hook in hooks:
         try:
@@ -366,8 +366,8 @@ SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": rep
 
 
 def _lock_output(folder: str, wait: bool):
-    """Hold the output folder's lock (executor.folder_lock) for the run, or say who holds it."""
-    from executor.folder_lock import FolderBusy, FolderLock
+    """Hold the output folder's lock (executor.output.folder_lock) for the run, or say who holds it."""
+    from executor.output.folder_lock import FolderBusy, FolderLock
 
     try:
         return FolderLock(folder, PROG).acquire(wait, on_wait=lambda text: click.echo(text, err=True))

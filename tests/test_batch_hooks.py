@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
 
-from executor.hooks import run_post_hooks
+from executor.children.hooks import run_post_hooks
 
 #: A hook that records its pid in the folder it is given, then sleeps (ignoring SIGINT if asked).
 HOOK = r'''

@@ -112,24 +112,3 @@ def test_reading_opens_only_an_existing_store_and_changes_nothing(store_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT schema_version FROM store_meta")).scalar() == 1
     engine.dispose()
-
-
-def test_the_runner_records_a_jobs_file_and_refuses_a_bad_one(tmp_path):
-    from executor.coverage_recording import record_job_coverage
-
-    url = f"sqlite:///{tmp_path / 's.db'}"
-    queue, batch = _batch(url, ["a", "b", "c"])
-    first, second, third = queue.jobs(batch.id)
-    records = CoverageRecords.attach(queue.engine)
-    (tmp_path / "a").mkdir()
-    (tmp_path / "a" / "coverage.json").write_text(json.dumps(_document(4.0)), encoding="utf-8")
-    (tmp_path / "b").mkdir()
-    (tmp_path / "b" / "coverage.json").write_text('{"format": "scenario-coverage/run"}', encoding="utf-8")
-    (tmp_path / "c").mkdir()
-    assert record_job_coverage(records, first.id, 1, tmp_path / "a") is None
-    problem = record_job_coverage(records, second.id, 1, tmp_path / "b")
-    assert problem.startswith(f"{tmp_path / 'b' / 'coverage.json'}:1:1: error: format_version: must be a whole")
-    assert record_job_coverage(records, third.id, 1, tmp_path / "c") is None       # no file: nothing recorded
-    assert records.document(first.id, "scenario-coverage/run", 1)["items"][0]["samples"] == [4.0]
-    assert records.document(second.id, "f", 1) is None and records.document(third.id, "f", 1) is None
-    queue.close()

@@ -14,7 +14,7 @@ from executor.actions import ActionBase, registry
 from executor.runtime.builder import BuildError, make_action
 from executor.runtime.context import ScenarioContext
 from executor.runtime.logger import Logger
-from executor.simulation import WallClock
+from executor.runtime.simulation import WallClock
 
 CALLS: list = []
 

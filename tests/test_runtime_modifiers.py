@@ -9,7 +9,7 @@ from py_trees.common import Status
 from executor.runtime.context import ScenarioContext
 from executor.runtime.logger import Logger
 from executor.runtime.modifiers import ModifierError, build_modifier
-from executor.simulation import SimulationClock
+from executor.runtime.simulation import SimulationClock
 
 S, F, R = Status.SUCCESS, Status.FAILURE, Status.RUNNING
 

@@ -16,7 +16,7 @@ from coverage_engine.results.scenario_result import ScenarioResult
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun, plan_runs, split_output_dirs
 from executor.runtime.session import SessionOptions, run_session
-from executor.simulation import SimulationError, SimulationInterface, load_simulation, reset_arguments
+from executor.runtime.simulation import SimulationError, SimulationInterface, load_simulation, reset_arguments
 
 
 def file_of(*scenarios) -> m.ScenarioFile:

@@ -27,7 +27,7 @@ from coverage_engine.resolve import model as m
 from executor.runtime.context import ScenarioContext
 from executor.runtime.logger import Logger
 from executor.runtime.tick_loop import ScenarioRunner
-from executor.simulation import SimulationClock
+from executor.runtime.simulation import SimulationClock
 
 
 class Steps:

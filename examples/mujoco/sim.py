@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from executor.simulation import SimulationInterface
+from executor.runtime.simulation import SimulationInterface
 from executor.simulations import engines
 
 MODEL = Path(__file__).resolve().parent / "ball.xml"

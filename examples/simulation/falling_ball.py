@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from executor.simulation import SimulationInterface
+from executor.runtime.simulation import SimulationInterface
 
 
 class FallingBall(SimulationInterface):

@@ -4,7 +4,7 @@ A batch without a launch command runs each job as ``scenario_execution {SCENARIO
 {OUTPUT_DIR}`` would run, but the process comes from :mod:`executor.batch.fork_server` (one per worker,
 started on the first such job), which has the command and the runtime imported and the standard
 libraries parsed. :class:`ForkServer` is the worker's side; its :meth:`~ForkServer.spawn` returns a
-:class:`ForkedProcess` that :class:`executor.process.ChildProcess` uses like a ``subprocess.Popen``,
+:class:`ForkedProcess` that :class:`executor.children.process.ChildProcess` uses like a ``subprocess.Popen``,
 so timeouts, cancellation, logs, echo, hooks and verdicts are the same code for both kinds of job.
 
 Measured, and why a fresh fork per job rather than a worker recycled after each job: a recycled worker
@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
 from executor.batch.fork_protocol import command_target, receive, send
-from executor.process import StartTicket
+from executor.children.process import StartTicket
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
 BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}")

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from executor.batch.folder_history import latest_jobs
 from executor.batch.junit_merge import child_cases, job_cases, job_names, variants_of
-from executor.terminal import printable
+from executor.output.terminal import printable
 from store.jobs import Batch, Job
 from store.queue import QueueStore
 from store.states import FINAL, JobState

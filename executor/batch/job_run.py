@@ -26,8 +26,8 @@ from executor.batch.verdict import (
     judge,
     launch_failure,
 )
-from executor.hooks import run_post_hooks
-from executor.process import ChildProcess, Launcher, disk_full
+from executor.children.hooks import run_post_hooks
+from executor.children.process import ChildProcess, Launcher, disk_full
 from store.jobs import Batch, Job, JobResult
 from store.states import NOT_STARTED_REASON, JobState
 

@@ -25,7 +25,7 @@ from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from coverage_engine.results.run_report import write_report
-from executor.process import disk_full
+from executor.children.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState

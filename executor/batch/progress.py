@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 from typing import TYPE_CHECKING, TextIO
 
-from executor.terminal import printable, wants_rich
+from executor.output.terminal import printable, wants_rich
 from store.jobs import Job, JobResult
 from store.states import JobState
 

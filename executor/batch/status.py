@@ -10,7 +10,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TextIO
 
-from executor.terminal import wants_rich
+from executor.output.terminal import wants_rich
 from store.jobs import Batch
 from store.queue import QueueStore
 from store.states import JobState

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from coverage_engine.results.read import JunitUnreadable, clean_text, has_problem, read_cases
 from coverage_engine.results.document import Case
-from executor.process import ProcessOutcome
+from executor.children.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState
 

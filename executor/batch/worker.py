@@ -26,7 +26,7 @@ from executor.batch.job_run import Done, JobRun, Started, StartOrder, job_marker
 from executor.batch.progress import Reporter
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
-from executor.process import RUNNER_ENV, disk_full, end_orphan_group, process_alive
+from executor.children.process import RUNNER_ENV, disk_full, end_orphan_group, process_alive
 from store.database import StoreError
 from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable

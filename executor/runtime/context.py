@@ -17,7 +17,7 @@ from executor.runtime.planned_runs import RunOrigin
 
 if TYPE_CHECKING:
     from executor.runtime.coverage_sampling import CoverageSampler
-    from executor.simulation import Clock
+    from executor.runtime.simulation import Clock
 
 
 class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error

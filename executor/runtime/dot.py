@@ -17,7 +17,7 @@ def write_dot_files(runs: Sequence[PlannedRun], directory: str, logger: Logger) 
 
     from executor.runtime.builder import build_tree
     from executor.runtime.context import ScenarioContext
-    from executor.simulation import WallClock
+    from executor.runtime.simulation import WallClock
 
     os.makedirs(directory, exist_ok=True)
     graphviz = shutil.which("dot")

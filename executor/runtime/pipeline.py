@@ -63,7 +63,7 @@ def _check_options(request: ExecutionRequest) -> None:
         return
     import shutil
 
-    from executor.hooks import split_hook
+    from executor.children.hooks import split_hook
 
     for hook in request.post_run:
         try:
@@ -222,7 +222,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
 
     simulation = None
     if request.simulation:
-        from executor.simulation import SimulationError, load_simulation, simulation_dt
+        from executor.runtime.simulation import SimulationError, load_simulation, simulation_dt
 
         try:
             simulation = load_simulation(request.simulation)
@@ -270,7 +270,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
             logger.warning("aborted: --post-run commands skipped")
         return 128 + outcome.aborted
     if request.post_run:
-        from executor.hooks import run_post_hooks
+        from executor.children.hooks import run_post_hooks
 
         def announce(command: str) -> None:
             logger.info(f"Running post-run: {command}")

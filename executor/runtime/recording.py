@@ -30,7 +30,7 @@ from typing import IO, Any
 import py_trees
 from py_trees.behaviour import Behaviour
 
-from executor.simulation import Clock, SimulationClock
+from executor.runtime.simulation import Clock, SimulationClock
 
 BEHAVIOUR_LOG = "behaviors.jsonl"
 TICK_TIMING = "tick_timing.csv"

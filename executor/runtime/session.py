@@ -20,7 +20,7 @@ from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import PlannedRun, RunOrigin
-from executor.simulation import (
+from executor.runtime.simulation import (
     Clock,
     SimulationClock,
     SimulationError,

@@ -25,7 +25,7 @@ from coverage_engine.results.scenario_result import ScenarioResult
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
 from executor.runtime.recording import Recorder
-from executor.simulation import SimulationClock, SimulationError, SimulationStepError
+from executor.runtime.simulation import SimulationClock, SimulationError, SimulationStepError
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]
 

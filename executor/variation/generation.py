@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
-from executor.terminal import printable
+from executor.output.terminal import printable
 from executor.variation import report
 from executor.variation.report import echo
 
@@ -169,7 +169,7 @@ def run(request: VariationRequest) -> int:
                  "written (every combination is checked before any file is written: fix the value(s) above)",
                  err=True)
             return 1
-        from executor.folder_lock import FolderBusy, FolderLock
+        from executor.output.folder_lock import FolderBusy, FolderLock
 
         try:
             lock = FolderLock(request.output_dir, "scenario_variation").acquire(

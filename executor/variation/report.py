@@ -2,7 +2,7 @@
 
 Messages go to stdout, problems to stderr, both plain text. Only the progress of a long generation
 (:data:`RICH_PROGRESS_FROM` variants or more) is a rich bar, and only where
-:func:`executor.terminal.wants_rich` allows it; elsewhere a plain line every few seconds.
+:func:`executor.output.terminal.wants_rich` allows it; elsewhere a plain line every few seconds.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
-from executor.terminal import wants_rich
+from executor.output.terminal import wants_rich
 
 if TYPE_CHECKING:
     from coverage_engine.variation.plan import VariationPlan

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from typing import Any, Protocol
 
 from executor.actions.base import ActionBase, ActionError
-from executor.simulation import Clock
+from executor.runtime.simulation import Clock
 from executor.simulations.pybullet.simulation import PyBulletSimulation
 from executor.simulations.pybullet.world import World
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from executor.simulation import SimulationError, SimulationInterface
+from executor.runtime.simulation import SimulationError, SimulationInterface
 from executor.simulations import engines
 from executor.simulations.pybullet.world import TIME_STEP, World
 

@@ -15,7 +15,7 @@ import signal
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from executor.process import ChildProcess, kill_group
+from executor.children.process import ChildProcess, kill_group
 
 HOOK_TIMEOUT = 600.0
 HOOK_GRACE = 5.0

@@ -1,8 +1,23 @@
 """The batch runner: scenario files become jobs in the store's queue, workers run each as a subprocess.
 
-Modules: ``inputs`` (files, shards, the launch command), ``job_run`` (one attempt in a thread),
-``verdict`` (judging an attempt), ``junit_merge`` (the merged report
-out), ``worker`` (the claim/run/finish loop, no SQL), ``progress`` and ``status`` (output for people),
-``orchestration`` (what the command line calls). Shared with ``scenario_execution``: :mod:`executor.process`
-(one child in its own process group, its log, its timeout) and :mod:`executor.hooks` (``--post-run``).
+``inputs``
+    the scenario files (``.osc``/``.sce``), shards, the launch command.
+``orchestration``
+    what the command line calls: enqueue, run the workers, write the merged report; ``errors`` its failures.
+``worker``
+    the claim/run/finish loop (no SQL), with ``watchdog`` (leases, stalled jobs).
+``job_run`` / ``job_folders``
+    one attempt in a thread and the job's own folder.
+``builtin_runner`` / ``fork_server`` / ``fork_protocol``
+    the built-in runner: jobs forked from a server that has imported the runtime once.
+``verdict``
+    judging an attempt: how the child ended and the ``test.xml`` it left become a job state and a reason.
+``junit_merge`` / ``failure_summary``
+    the merged report of the store's jobs (built with :mod:`coverage_engine.results`) and the end-of-run list.
+``folder_history`` / ``coverage_source``
+    the chain of batches of one folder, and its runs as the coverage model's input.
+``progress`` / ``status``
+    output for people.
+
+Shared with ``scenario_execution``: :mod:`executor.children` (child processes, ``--post-run`` hooks).
 """

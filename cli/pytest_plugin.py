@@ -24,8 +24,9 @@ from pathlib import Path
 
 import pytest
 
-#: Suffixes collected as scenarios.
-SUFFIXES = (".osc", ".sce")
+from coverage_engine.results.files import LOG_FILE, RESULT_FILE
+from coverage_engine.suffixes import OSC_SUFFIX, SCENARIO_SUFFIXES
+
 #: Lines of a failing run's log shown under its message.
 LOG_TAIL_LINES = 30
 
@@ -60,7 +61,7 @@ _ROOTS = pytest.StashKey[list]()
 
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
     roots = parent.config.stash.get(_ROOTS, None)
-    if not roots or file_path.suffix not in SUFFIXES:
+    if not roots or file_path.suffix not in SCENARIO_SUFFIXES:
         return None
     resolved = file_path.resolve()
     if not any(resolved == root or root in resolved.parents for root in roots):
@@ -77,7 +78,7 @@ class ScenarioFile(pytest.File):
 
 def _item_name(path: Path) -> str:
     """The scenario's name for an ``.osc`` with exactly one scenario, else the file's stem."""
-    if path.suffix == ".osc":
+    if path.suffix == OSC_SUFFIX:
         try:
             from coverage_engine.parse.parser import parse_text
             from coverage_engine.variation.dimensions import scenario_names
@@ -117,9 +118,9 @@ class ScenarioItem(pytest.Item):
             log = (exc.stdout or b"").decode("utf-8", "replace")
             raise ScenarioFailed(f"timed out after {config.getoption('osc_timeout'):g} s", _tail(log)) from None
         log = done.stdout.decode("utf-8", "replace")
-        (output / "log.txt").write_text(log, encoding="utf-8")
+        (output / LOG_FILE).write_text(log, encoding="utf-8")
         if done.returncode != 0:
-            raise ScenarioFailed(_failure_message(output / "test.xml", log), _tail(log))
+            raise ScenarioFailed(_failure_message(output / RESULT_FILE, log), _tail(log))
 
     def repr_failure(self, excinfo, style=None):
         if isinstance(excinfo.value, ScenarioFailed):
@@ -138,16 +139,13 @@ def _folder_name(nodeid: str) -> str:
 def _failure_message(report: Path, log: str) -> str:
     """The first failure or error message of the run's ``test.xml`` (it holds the location), else the log's
     last error line."""
-    try:
-        from defusedxml import ElementTree
+    from coverage_engine.results.read import JunitUnreadable, read_cases
 
-        root = ElementTree.parse(str(report)).getroot()
-        for case in root.iter("testcase") if root is not None else ():
-            for tag in ("failure", "error"):
-                found = case.find(tag)
-                if found is not None and found.get("message"):
-                    return f"{case.get('name')}: {found.get('message')}"
-    except Exception:  # noqa: BLE001 - no readable report: fall back to the log
+    try:
+        for case in read_cases(report.read_text(encoding="utf-8", errors="replace")):
+            if case.problem and case.message:
+                return f"{case.name}: {case.message}"
+    except (OSError, JunitUnreadable):      # no readable report: fall back to the log
         pass
     errors = [line for line in log.splitlines() if "error" in line.lower()]
     return errors[-1] if errors else "the scenario failed (see its log)"

@@ -21,6 +21,7 @@ import click
 
 from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
+from coverage_engine.results.files import RESULT_FILE
 from executor.batch.errors import BatchError, BatchUsageError
 from store.database import StoreError, StoreMissing
 
@@ -219,7 +220,7 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
             return 0
         ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
         counts, signum = ran.counts, ran.signum
-        report: str | None = os.path.join(batch.output_dir, orchestration.REPORT_FILE)
+        report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
         _print_failures(store, batch)
         if ran.report_error is not None:
             report = None
@@ -331,7 +332,7 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
 @click.command(context_settings=CONTEXT)
 @store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
-@click.option("-o", "--output", default="test.xml", show_default=True, type=click.Path(dir_okay=False),
+@click.option("-o", "--output", default=RESULT_FILE, show_default=True, type=click.Path(dir_okay=False),
               help="File for the merged JUnit report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option

@@ -144,8 +144,8 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
 def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
-    from coverage_engine.results.atomic import write_text_atomically
     from coverage_engine.coverage.render_html import render_html
+    from coverage_engine.results.atomic import write_text_atomically
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
@@ -164,8 +164,8 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
-    from coverage_engine.results.atomic import write_text_atomically
     from coverage_engine.coverage.render_json import render_json
+    from coverage_engine.results.atomic import write_text_atomically
 
     report = _report(results, store_url, batch_id, plan_file)
     text = render_json(report)

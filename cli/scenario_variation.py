@@ -17,6 +17,7 @@ import click
 
 from cli.boundary import Boundary
 from cli.options import debug_option, store_option
+from coverage_engine.suffixes import OSC_SUFFIX
 from executor.variation.generation import DEFAULT_MAX_VARIANTS, VariationRequest, VariationStoreError
 
 #: --strategy values (coverage_engine.variation.strategies.STRATEGIES; spelled here so -h imports nothing more).
@@ -88,7 +89,7 @@ def _scenario_files(given: tuple[str, ...]) -> list[str]:
     for item in given:
         path = Path(item)
         if path.is_dir():
-            found = sorted(str(p) for p in path.iterdir() if p.suffix == ".osc" and p.is_file())
+            found = sorted(str(p) for p in path.iterdir() if p.suffix == OSC_SUFFIX and p.is_file())
             if not found:
                 raise click.UsageError(f"{item}: a folder without .osc files")
             files += found

@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from tests_schema import assert_valid
 
+from coverage_engine.results.atomic import write_text_atomically
 from executor.batch.junit_merge import merged_report
-from coverage_engine.results.run_report import write_report
 from store.jobs import Job
 from store.states import JobState
 from store.variant_lookup import VariantInfo
@@ -103,7 +103,7 @@ def test_entity_expansion_is_refused_and_report_written_atomically(tmp_path):
     target = tmp_path / "out" / "test.xml"
     target.parent.mkdir()
     target.write_text("old")
-    write_report(target, text)
+    write_text_atomically(target, text)
     assert _root(target.read_text()).get("errors") == "1"
     assert [p.name for p in target.parent.iterdir()] == ["test.xml"]
 

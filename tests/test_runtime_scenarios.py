@@ -26,8 +26,8 @@ from runtime_models import (
 from coverage_engine.resolve import model as m
 from executor.runtime.context import ScenarioContext
 from executor.runtime.logger import Logger
-from executor.runtime.tick_loop import ScenarioRunner
 from executor.runtime.simulation import SimulationClock
+from executor.runtime.tick_loop import ScenarioRunner
 
 
 class Steps:

@@ -22,28 +22,29 @@ from pathlib import Path
 import yaml
 
 from coverage_engine.coverage.errors import ResultsError, RunFileError, location
-from coverage_engine.results.verdicts import JunitUnreadable, iter_suites, run_verdict
 from coverage_engine.coverage.merge import parse_assigned
-from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
+from coverage_engine.coverage.run_file import RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import (
-    DECLARED_FILE,
     HEADER_CHARS,
     InputDomain,
     header_domains,
     read_declared,
 )
+from coverage_engine.results.files import COVERAGE_FILE, DECLARED_FILE, LOG_FILE, RESULT_FILE
+from coverage_engine.results.read import JunitUnreadable
+from coverage_engine.results.verdicts import (
+    FAILING,
+    VERDICT_OF_STATE,
+    Verdict,
+    iter_suite_verdicts,
+    run_verdict,
+)
+from coverage_engine.suffixes import SCE_SUFFIX
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
-
-REPORT_FILE = "test.xml"
-LOG_FILE = "log.txt"
 
 #: Largest .sce file read for its assignment.
 MAX_SCE_BYTES = 16 * 1024 * 1024
-
-
-#: Verdicts a batch job's ``status`` property names, mapped to run verdicts.
-_STATUS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error"}
 
 
 def _inside(root: Path, path: Path) -> bool:
@@ -65,7 +66,7 @@ def _domains_from_sce(path: str) -> list[InputDomain]:
 
 def _assignment_from_sce(path: str) -> dict[str, object]:
     """The ``assignment`` of a ``.sce`` file (YAML), or {} when it cannot be read."""
-    if not path.endswith(".sce"):
+    if not path.endswith(SCE_SUFFIX):
         return {}
     try:
         if os.path.getsize(path) > MAX_SCE_BYTES:
@@ -93,7 +94,7 @@ class _Reader:
     def declare(self, scenario_file: str, keys: Iterable[str]) -> None:
         """Note what the variation declared for ``keys`` (the ``# domain`` lines of the ``.sce`` a run ran),
         read once per folder of variants and set of parameters."""
-        if not scenario_file.endswith(".sce"):
+        if not scenario_file.endswith(SCE_SUFFIX):
             return
         group = (os.path.dirname(scenario_file), frozenset(keys))
         if group not in self.declared:
@@ -118,7 +119,7 @@ class _Reader:
         return path if path.is_file() else None
 
     def coverage(self, folder: Path) -> RunCoverage | None:
-        path = self.file(folder, RUN_FILE)
+        path = self.file(folder, COVERAGE_FILE)
         if path is None:
             return None
         try:
@@ -150,14 +151,14 @@ def _job_folders(root: Path, reader: _Reader) -> dict[str, Path]:
         if entry.is_symlink() and not _inside(root, path):
             reader.skipped_links.append(str(path))
             continue
-        if any(os.path.lexists(path / name) for name in (REPORT_FILE, RUN_FILE, LOG_FILE)):
+        if any(os.path.lexists(path / name) for name in (RESULT_FILE, COVERAGE_FILE, LOG_FILE)):
             folders[entry.name] = path
     return folders
 
 
 def _is_merged(report: Path) -> bool:
     try:
-        for suite in iter_suites(report):
+        for suite in iter_suite_verdicts(report):
             return "status" in suite.properties and "scenario_file" in suite.properties
     except JunitUnreadable:
         return False
@@ -166,7 +167,7 @@ def _is_merged(report: Path) -> bool:
 
 def _single_run(root: Path, reader: _Reader) -> Iterator[RunInput]:
     coverage = reader.coverage(root)
-    report = reader.file(root, REPORT_FILE)
+    report = reader.file(root, RESULT_FILE)
     if report is not None:
         verdict, reason = run_verdict(report)
     elif coverage is not None:
@@ -183,19 +184,19 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _R
     report_time = report.stat().st_mtime
     newer = 0
     try:
-        for suite in iter_suites(report):
+        for suite in iter_suite_verdicts(report):
             name = suite.name
             listed.add(name)
             verdict = suite.verdict
-            status = _STATUS.get(suite.properties.get("status", ""))
-            if verdict == "passed" and status in ("failed", "error"):
+            status = VERDICT_OF_STATE.get(suite.properties.get("status", ""))
+            if verdict is Verdict.PASSED and status in FAILING:
                 verdict = status   # the process failed although its testcases passed
             reason = None if verdict == "passed" else suite.reason or suite.properties.get("reason")
             folder = folders.get(name)
             if folder is None:
                 reader.missing_folders += 1
             elif any((folder / f).exists() and (folder / f).stat().st_mtime > report_time + 1
-                     for f in (REPORT_FILE, RUN_FILE)):
+                     for f in (RESULT_FILE, COVERAGE_FILE)):
                 newer += 1
             assignment = {k[len("variation."):]: parse_assigned(v) for k, v in suite.properties.items()
                           if k.startswith("variation.")}
@@ -229,7 +230,7 @@ def _unmerged(names: list[str], folders: dict[str, Path], reader: _Reader) -> It
     for name in names:
         folder = folders[name]
         coverage = reader.coverage(folder)
-        report = reader.file(folder, REPORT_FILE)
+        report = reader.file(folder, RESULT_FILE)
         if report is not None:
             verdict, reason = run_verdict(report)
         elif coverage is not None:
@@ -250,15 +251,15 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
     reader = _Reader(root)
     source = RunSource(label=str(given), runs=iter(()), root=str(root))
     source.declare(read_declared(str(root / DECLARED_FILE)))     # the batch's record; .sce headers add to it
-    report = reader.file(root, REPORT_FILE)
-    if report is None and reader.file(root, RUN_FILE) is None:
+    report = reader.file(root, RESULT_FILE)
+    if report is None and reader.file(root, COVERAGE_FILE) is None:
         shards = _shards(root)
         if shards:
             return read_results_folders([str(given / name) for name in shards], label=str(given))
     folders = _job_folders(root, reader)
     if report is not None and _is_merged(report):
         runs: Iterator[RunInput] = _merged_batch(root, report, folders, reader, source)
-    elif report is not None or reader.file(root, RUN_FILE) is not None:
+    elif report is not None or reader.file(root, COVERAGE_FILE) is not None:
         runs = _single_run(root, reader)
     elif folders:
         source.complete = False
@@ -289,7 +290,7 @@ def _holds_jobs(folder: Path) -> bool:
     except OSError:
         return False
     return any(e.is_dir(follow_symlinks=False) and any(os.path.lexists(Path(e.path) / name)
-                                                       for name in (REPORT_FILE, RUN_FILE, LOG_FILE))
+                                                       for name in (RESULT_FILE, COVERAGE_FILE, LOG_FILE))
                for e in entries if not e.name.startswith("."))
 
 
@@ -304,12 +305,12 @@ def _shards(root: Path) -> list[str]:
         if entry.name.startswith(".") or not entry.is_dir(follow_symlinks=False):
             continue
         folder = Path(entry.path)
-        report = folder / REPORT_FILE
+        report = folder / RESULT_FILE
         if report.is_file() and not report.is_symlink():
             if not _is_merged(report):
                 return []
             merged.append(entry.name)
-        elif any(os.path.lexists(folder / name) for name in (RUN_FILE, LOG_FILE)):
+        elif any(os.path.lexists(folder / name) for name in (COVERAGE_FILE, LOG_FILE)):
             return []
         elif _holds_jobs(folder):
             unfinished.append(entry.name)

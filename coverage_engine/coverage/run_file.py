@@ -29,14 +29,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from coverage_engine.results.atomic import write_text_atomically
 from coverage_engine.coverage.errors import RunFileError, location
 from coverage_engine.coverage.json_positions import line_column, locate
 from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: the file's public records
     FORMAT,
     FORMAT_VERSION,
     MAX_FILE_BYTES,
-    RUN_FILE,
     UNSAMPLED_VERSION,
     VERDICTS,
     ItemDecl,
@@ -45,9 +43,11 @@ from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: 
 )
 from coverage_engine.coverage.run_schema import Invalid, path_text, validate
 from coverage_engine.coverage.values import ValueType
+from coverage_engine.results.atomic import write_text_atomically
+from coverage_engine.results.files import COVERAGE_FILE
 
 
-def parse_declarations(items: Sequence[Mapping[str, Any]], origin: str = RUN_FILE) -> tuple[ItemDecl, ...]:
+def parse_declarations(items: Sequence[Mapping[str, Any]], origin: str = COVERAGE_FILE) -> tuple[ItemDecl, ...]:
     """Item declarations (``items`` of a coverage document without samples), validated like a file's."""
     doc = {"format": FORMAT, "format_version": FORMAT_VERSION, "run": {"scenario": "", "verdict": "passed"},
            "items": [{k: v for k, v in item.items() if k not in ("samples", "ignored")} for item in items]}
@@ -58,7 +58,7 @@ def parse_declarations(items: Sequence[Mapping[str, Any]], origin: str = RUN_FIL
 
 
 # ------------------------------------------------------------------------------------------ reading
-def parse_run_coverage(text: str, filename: str = RUN_FILE) -> RunCoverage:
+def parse_run_coverage(text: str, filename: str = COVERAGE_FILE) -> RunCoverage:
     """Decode and validate the text of a ``coverage.json``; errors point at the bad value."""
     try:
         doc = json.loads(text)
@@ -152,7 +152,7 @@ def run_coverage_text(run: RunCoverage) -> str:
 
 
 def write_run_coverage(target: str | os.PathLike[str], run: RunCoverage) -> Path:
-    """Write ``run`` to ``target`` (a file, or a folder to hold :data:`RUN_FILE`) atomically; returns the path.
+    """Write ``run`` to ``target`` (a file, or a folder to hold :data:`COVERAGE_FILE`) atomically; returns the path.
 
     The text goes to a new temporary file in the same folder, is flushed to disk and then renamed over
     the target, so a reader (or a crash) never sees half a file; an existing link at the target is
@@ -160,7 +160,7 @@ def write_run_coverage(target: str | os.PathLike[str], run: RunCoverage) -> Path
     """
     path = Path(target)
     if path.is_dir():
-        path = path / RUN_FILE
+        path = path / COVERAGE_FILE
     return write_text_atomically(path, run_coverage_text(run))
 
 

@@ -11,9 +11,6 @@ from dataclasses import dataclass, field
 
 from coverage_engine.coverage.values import ValueType
 
-#: The file a run writes into its output folder.
-RUN_FILE = "coverage.json"
-
 FORMAT = "scenario-coverage/run"
 FORMAT_VERSION = 1
 #: The version of a file that holds ``unsampled`` values (a reader of version 1 would refuse the key, so

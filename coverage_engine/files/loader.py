@@ -12,8 +12,7 @@ from pathlib import Path
 
 from coverage_engine.errors import OscError
 from coverage_engine.resolve.model import ScenarioFile
-
-SCENARIO_SUFFIXES = (".osc", ".sce")
+from coverage_engine.suffixes import SCE_SUFFIX, SCENARIO_SUFFIXES
 
 
 def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None = None) -> ScenarioFile:
@@ -29,7 +28,7 @@ def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None 
         raise OscError(f"{path}: not a scenario file (expected .osc or .sce)")
     if not path.is_file():
         raise OscError(f"{path}: no such file")
-    if path.suffix == ".sce":
+    if path.suffix == SCE_SUFFIX:
         from coverage_engine.files.sce import read_sce
 
         document = read_sce(path)

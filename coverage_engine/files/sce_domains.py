@@ -178,10 +178,6 @@ def read_domains(lines: Iterable[str]) -> list[InputDomain]:
     return found
 
 
-#: The file a batch leaves beside its merged ``test.xml``: what the variations of its variants declared,
-#: so the results folder is reported right where the ``.sce`` files are not (a CI job with only the results).
-DECLARED_FILE = "declared.json"
-
 #: Largest ``declared.json`` read.
 MAX_DECLARED_BYTES = 16 * 1024 * 1024
 

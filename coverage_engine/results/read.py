@@ -1,22 +1,45 @@
-"""Reading a child's JUnit XML safely (defusedxml) into :class:`~coverage_engine.results.document.Case` records.
+"""The one reader of JUnit XML: a child's ``test.xml``, a run's own, or a batch's merged report.
 
-Children are any program, so their XML is untrusted: entity tricks are refused, counts are taken from
-the testcases themselves rather than from the (possibly wrong) totals attributes, and a time that is
-not a number is taken as unknown.
+Children are any program, so their XML is untrusted: it is read with defusedxml (entity tricks are
+refused), counts are taken from the testcases themselves rather than from the (possibly wrong) totals
+attributes, and a time that is not a number is taken as unknown. Every testcase becomes a
+:class:`~coverage_engine.results.document.Case`. A whole document in memory (:func:`read_cases`, for
+a job's report of bounded size) or streamed suite by suite (:func:`iter_suites`, so a merged report of
+100,000 jobs never sits in memory whole).
 """
 
 from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
 
 from defusedxml import ElementTree as SafeET
 from defusedxml.common import DefusedXmlException
 
 from coverage_engine.results.document import Case, clean_text
 
-__all__ = ["JunitUnreadable", "clean_text", "has_problem", "read_cases"]
+__all__ = ["JunitUnreadable", "Suite", "clean_text", "has_problem", "iter_suites", "read_cases"]
+
+#: The root elements a JUnit document may have.
+_ROOTS = ("testsuites", "testsuite")
+
+#: The result elements of a testcase, in the order one is looked for (the first found wins).
+_RESULT_TAGS = ("error", "failure", "skipped")
 
 
 class JunitUnreadable(Exception):
-    """The child's test.xml could not be read as JUnit XML."""
+    """A file or text is not JUnit XML we can read."""
+
+
+@dataclass(frozen=True)
+class Suite:
+    """One ``<testsuite>`` read from a document: its name, properties and testcases."""
+
+    name: str
+    properties: dict[str, str]
+    cases: tuple[Case, ...]
 
 
 def _float(value: str | None) -> float | None:
@@ -27,34 +50,74 @@ def _float(value: str | None) -> float | None:
     return number if number is not None and number == number and number >= 0 else None
 
 
+def _case(element: Any) -> Case:
+    """The :class:`Case` of one ``<testcase>`` element."""
+    outcome, message, kind, text = "passed", None, None, None
+    for tag in _RESULT_TAGS:
+        found = element.find(tag)
+        if found is not None:
+            outcome = tag
+            message = found.get("message")
+            kind = found.get("type")
+            text = (found.text or "").strip() or None
+            break
+    out = element.find("system-out")
+    err = element.find("system-err")
+    return Case(name=element.get("name") or "unnamed", classname=element.get("classname") or "",
+                time=_float(element.get("time")), outcome=outcome, message=message, type=kind, text=text,
+                stdout=None if out is None else out.text, stderr=None if err is None else err.text)
+
+
 def read_cases(xml_text: str) -> list[Case]:
     """The testcases of a JUnit document (``<testsuites>`` or a single ``<testsuite>``), in document order."""
     try:
         root = SafeET.fromstring(xml_text)
     except (SafeET.ParseError, DefusedXmlException, ValueError) as exc:
         raise JunitUnreadable(f"test.xml is not well-formed XML: {exc}") from None
-    if root.tag not in ("testsuites", "testsuite"):
+    if root.tag not in _ROOTS:
         raise JunitUnreadable(f"test.xml has root <{root.tag}>, expected <testsuites> or <testsuite>")
-    cases = []
-    for case in root.iter("testcase"):
-        outcome, message, kind, text = "passed", None, None, None
-        for tag in ("error", "failure", "skipped"):
-            found = case.find(tag)
-            if found is not None:
-                outcome = tag
-                message = found.get("message")
-                kind = found.get("type")
-                text = (found.text or "").strip() or None
-                break
-        out = case.find("system-out")
-        err = case.find("system-err")
-        cases.append(Case(
-            name=case.get("name") or "unnamed", classname=case.get("classname") or "",
-            time=_float(case.get("time")), outcome=outcome, message=message, type=kind, text=text,
-            stdout=None if out is None else out.text, stderr=None if err is None else err.text))
-    return cases
+    return [_case(case) for case in root.iter("testcase")]
 
 
 def has_problem(cases: list[Case]) -> bool:
     """Whether any testcase failed or erred."""
     return any(case.problem for case in cases)
+
+
+def _suite(element: Any) -> Suite:
+    properties: dict[str, str] = {}
+    holder = element.find("properties")
+    if holder is not None:
+        for prop in holder.iter("property"):
+            name = prop.get("name")
+            if name is not None:
+                properties[name] = prop.get("value") or ""
+    return Suite(name=element.get("name") or "", properties=properties,
+                 cases=tuple(_case(case) for case in element.iter("testcase")))
+
+
+def iter_suites(path: str | os.PathLike[str]) -> Iterator[Suite]:
+    """Each ``<testsuite>`` of a report file, in document order (a bare ``<testsuite>`` root is one)."""
+    try:
+        root = None
+        depth = 0
+        for event, element in SafeET.iterparse(os.fspath(path), events=("start", "end")):
+            if event == "start":
+                if root is None:
+                    root = element
+                    if element.tag not in _ROOTS:
+                        raise JunitUnreadable(f"root element <{element.tag}>, expected <testsuites> or <testsuite>")
+                if element.tag == "testsuite":
+                    depth += 1
+                continue
+            if element.tag == "testsuite":
+                depth -= 1
+                if depth == 0:
+                    yield _suite(element)
+                    element.clear()
+                    if root is not None and root is not element:
+                        root.clear()
+    except (SafeET.ParseError, DefusedXmlException, ValueError) as exc:
+        raise JunitUnreadable(f"not well-formed XML: {exc}") from None
+    except OSError as exc:
+        raise JunitUnreadable(f"cannot read: {exc.strerror or exc}") from None

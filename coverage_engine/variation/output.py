@@ -23,12 +23,10 @@ from coverage_engine.files.sce import is_sce_text
 from coverage_engine.files.sce_domains import InputDomain, listed_domain
 from coverage_engine.files.sce_writer import SceTemplate, relative_source_dir
 from coverage_engine.lazy import NumberTexts, per_choice, row_texts
+from coverage_engine.suffixes import SCE_SUFFIX
 from coverage_engine.variation.drawn import DrawnChoices
 from coverage_engine.variation.plan import Rejection, VariationPlan
 from coverage_engine.variation.writer import FileWriter
-
-#: The ``.sce`` suffix; files are named ``<source stem><index>.sce``.
-SUFFIX = ".sce"
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,7 +94,7 @@ def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, coun
     if not folder.is_dir():
         return OutputSurvey([], [])
     source = Path(source)
-    start, end = len(source.stem), -len(SUFFIX)
+    start, end = len(source.stem), -len(SCE_SUFFIX)
     earlier, foreign = [], []
     for path in sorted(_named_like_variants(folder, source.stem)):
         ours = not path.is_symlink() and path.is_file() and written_from(path, source)
@@ -109,7 +107,7 @@ def survey_output(output_dir: str | os.PathLike, source: str | os.PathLike, coun
 
 
 def _named_like_variants(folder: Path, stem: str) -> list[Path]:
-    pattern = re.compile(re.escape(stem) + r"[0-9]+" + re.escape(SUFFIX))
+    pattern = re.compile(re.escape(stem) + r"[0-9]+" + re.escape(SCE_SUFFIX))
     try:
         names = os.listdir(folder)
     except OSError:
@@ -303,7 +301,7 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
                 index, next_index = next_index, next_index + 1
             text = template.render(index, choices, spelled)
             data = text.encode("utf-8")
-            path = f"{prefix}{index}{SUFFIX}"
+            path = f"{prefix}{index}{SCE_SUFFIX}"
             batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
             earlier = bool(existing) and os.path.basename(path) in existing
             if not (earlier and _same_content(path, data)):

@@ -15,9 +15,11 @@ import os
 from collections.abc import Iterable, Iterator
 
 from coverage_engine.coverage.errors import RunFileError
-from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
+from coverage_engine.coverage.run_file import ItemDecl, parse_declarations, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
+from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE
+from coverage_engine.results.verdicts import VERDICT_OF_STATE, Verdict
 from executor.batch.folder_history import batch_chain, latest_of
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
@@ -26,9 +28,6 @@ from store.states import FINAL
 
 _decode = json.JSONDecoder().raw_decode
 
-#: Job states as run verdicts; queued and running jobs are ``pending`` (not finished).
-_VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error",
-             "cancelled": "skipped", "queued": "pending", "running": "pending"}
 
 #: Job states (as the store writes them) that are a verdict: a later job of the same name replaces an earlier one.
 _FINISHED = frozenset(state.value for state in FINAL)
@@ -74,8 +73,8 @@ class _StoreRuns:
         return self.declarations[schema_id]
 
     def _run(self, row: StoredRun) -> RunInput:
-        verdict = _VERDICTS.get(row.status, "error")
-        if verdict == "pending":
+        verdict = VERDICT_OF_STATE.get(row.status, Verdict.ERROR)
+        if verdict is Verdict.PENDING:
             self.pending += 1
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
         if row.body is not None and row.schema_id is not None:
@@ -102,11 +101,11 @@ class _StoreRuns:
     def _folder_run(self, row: StoredRun, verdict: str, folder: str | None) -> RunInput:
         """A job without coverage in the store: its ``coverage.json`` when its folder is on this host."""
         run = RunInput(name=row.name, verdict=verdict, reason=row.reason, folder=folder,
-                       log=os.path.join(folder, "log.txt") if folder else None)
+                       log=os.path.join(folder, LOG_FILE) if folder else None)
         assignment: dict[str, object] = {}
-        if folder is not None and verdict != "pending" and os.path.isfile(os.path.join(folder, RUN_FILE)):
+        if folder is not None and verdict != Verdict.PENDING and os.path.isfile(os.path.join(folder, COVERAGE_FILE)):
             try:
-                coverage = read_run_coverage(os.path.join(folder, RUN_FILE))
+                coverage = read_run_coverage(os.path.join(folder, COVERAGE_FILE))
             except RunFileError as exc:
                 self.source.warnings.append(f"{exc} (its items are left out; the run still counts)")
             else:

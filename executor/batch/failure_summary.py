@@ -14,6 +14,7 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+from coverage_engine.results.files import LOG_FILE
 from executor.batch.folder_history import latest_jobs
 from executor.batch.junit_merge import child_cases, job_cases, job_names, variants_of
 from executor.output.terminal import printable
@@ -59,7 +60,7 @@ def not_passed(jobs: Iterable[Job], variants: Mapping | None = None) -> list[Not
         reason = " ".join(reason.split())
         if len(reason) > REASON_CHARS:
             reason = reason[:REASON_CHARS - 1] + "…"
-        log = os.path.join(job.output_dir, "log.txt") if job.output_dir else None
+        log = os.path.join(job.output_dir, LOG_FILE) if job.output_dir else None
         found.append(NotPassed(job.status.value, names.name, reason, log, job.scenario_path))
     return found
 

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from coverage_engine.suffixes import SCENARIO_SUFFIXES
 from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScenarios
 from store.jobs import JobSpec
 
@@ -21,7 +22,6 @@ SCENARIO = "{SCENARIO}"
 OUTPUT_DIR = "{OUTPUT_DIR}"
 
 #: File name endings of scenario files (OpenSCENARIO DSL files and the variants written by scenario_variation).
-SCENARIO_SUFFIXES = (".sce", ".osc")
 
 #: Scenario texts up to this size are kept in the store, so workers on other hosts can run them.
 MAX_STORED_TEXT = 1024 * 1024

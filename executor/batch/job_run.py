@@ -15,12 +15,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
+from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
 from executor.batch.builtin_runner import BUILTIN_COMMAND
 from executor.batch.inputs import substitute
 from executor.batch.verdict import (
-    COVERAGE_FILE,
-    LOG_FILE,
-    RESULT_FILE,
     FileMark,
     disk_full_result,
     judge,

@@ -26,10 +26,11 @@ from pathlib import Path
 from sqlalchemy import Engine
 
 from coverage_engine.files.sce_domains import HEADER_CHARS
-from coverage_engine.results.read import JunitUnreadable, read_cases
-from coverage_engine.results.run_report import failure_text, iso_timestamp
 from coverage_engine.results.document import Case, document, suite_element
 from coverage_engine.results.names import declared_scenarios, drawn_units, scenario_classname, variant_name
+from coverage_engine.results.read import JunitUnreadable, read_cases
+from coverage_engine.results.run_report import failure_text, iso_timestamp
+from coverage_engine.suffixes import OSC_SUFFIX, SCE_SUFFIX
 from store.jobs import Job
 from store.states import FINAL, HALT_REASON, NOT_STARTED_REASON, JobState
 from store.variant_lookup import VariantInfo, variant_infos
@@ -113,13 +114,13 @@ def variants_of(engine: Engine, paths: Iterable[str]) -> dict[str, VariantInfo]:
 
 def job_names(job: Job, variant: VariantInfo | None = None) -> JobNames:
     """Names of the job's testcase: from the store's variant record, else the file itself, else its stem."""
-    if variant is None and job.scenario_path.endswith(".sce"):
+    if variant is None and job.scenario_path.endswith(SCE_SUFFIX):
         variant = _variant_from_file(job.scenario_path)
     if variant is not None and variant.scenario:
         source = variant.source or job.name
         return JobNames(scenario_classname(source, variant.scenario),
                         variant_name(job.name, variant.assignment, variant.scenario, drawn_units(variant.header)))
-    text = _peek(job.scenario_path) if job.scenario_path.endswith(".osc") else None
+    text = _peek(job.scenario_path) if job.scenario_path.endswith(OSC_SUFFIX) else None
     scenarios = declared_scenarios(text) if text else []
     stem = Path(job.scenario_path).stem or job.name
     return JobNames(scenario_classname(stem, scenarios[0] if len(scenarios) == 1 else None), job.name)
@@ -227,7 +228,7 @@ def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | N
     and given its ``variation.*`` properties from its own ``.sce`` header, so the values reach the report
     whatever store was used.
     """
-    if variant is None and job.scenario_path.endswith(".sce"):
+    if variant is None and job.scenario_path.endswith(SCE_SUFFIX):
         variant = _variant_from_file(job.scenario_path)
     reported = child_cases(job)
     cases = job_cases(job, job_names(job, variant), reported, interrupted)

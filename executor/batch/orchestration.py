@@ -16,22 +16,20 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from coverage_engine.files.sce_domains import InputDomain, declared_text, header_domains
 from coverage_engine.results.atomic import write_text_atomically
-from coverage_engine.files.sce_domains import DECLARED_FILE, InputDomain, declared_text, header_domains
+from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
-from coverage_engine.results.run_report import write_report
 from executor.children.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
 from store.states import JobState
 from store.variant_lookup import VariantInfo
-
-REPORT_FILE = "test.xml"
 
 #: Exit codes of an interrupted run: 128 + the signal number, as shells report it.
 EXIT_INTERRUPTED: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
@@ -264,7 +262,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     if summary.disk_full is not None and interrupted is None:
         interrupted = DISK_FULL_NAME
     try:
-        counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
+        counts = write_batch_report(store, batch, Path(batch.output_dir) / RESULT_FILE, interrupted=interrupted)
     except BatchError as exc:
         if summary.disk_full is None and not (exc.__cause__ and disk_full(exc.__cause__)):
             raise
@@ -298,7 +296,7 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     variants = variants_of(store.engine, [j.scenario_path for j in listed])
     xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
     try:
-        write_report(path, xml_text)
+        write_text_atomically(path, xml_text)
         write_declared(Path(path).parent, variants.values())
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc

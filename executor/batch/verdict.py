@@ -15,15 +15,12 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from coverage_engine.results.read import JunitUnreadable, clean_text, has_problem, read_cases
 from coverage_engine.results.document import Case
+from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
+from coverage_engine.results.read import JunitUnreadable, clean_text, has_problem, read_cases
 from executor.children.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
 from store.states import JobState
-
-RESULT_FILE = "test.xml"
-LOG_FILE = "log.txt"
-COVERAGE_FILE = "coverage.json"
 
 #: Largest coverage.json read with a job's result.
 COVERAGE_MAX_BYTES = 16 * 1024 * 1024

@@ -17,6 +17,8 @@ import sys
 from collections.abc import Sequence
 
 from coverage_engine.errors import OscError
+from coverage_engine.results.files import RESULT_FILE
+from coverage_engine.suffixes import SCE_SUFFIX
 from executor.runtime.logger import Logger
 
 EXIT_OK = 0
@@ -122,7 +124,7 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
 
 def _variant(scenario: str):
     """The ``.sce`` document of a variant (None for an ``.osc``, or a ``.sce`` that cannot be read)."""
-    if not scenario.endswith(".sce"):
+    if not scenario.endswith(SCE_SUFFIX):
         return None
     from coverage_engine.files.sce import read_sce
 
@@ -171,7 +173,7 @@ def execute(request: ExecutionRequest) -> int:
             os.makedirs(output_root, exist_ok=True)
         except OSError as exc:
             raise UsageProblem(f"cannot create output directory '{request.output_dir}': {exc.strerror}") from exc
-        stale = os.path.join(output_root, "test.xml")
+        stale = os.path.join(output_root, RESULT_FILE)
         if os.path.isfile(stale):
             os.remove(stale)
 
@@ -208,7 +210,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     # A .sce file's user modules live beside the .osc it was generated from: the model says where.
     model_dirs = [d for scenario_file, _ in loaded for d in scenario_file.search_paths]
     add_import_paths([os.getcwd(), scenario_dir, *model_dirs])
-    if request.scenario.endswith(".sce") and model_dirs and os.path.isdir(model_dirs[0]):
+    if request.scenario.endswith(SCE_SUFFIX) and model_dirs and os.path.isdir(model_dirs[0]):
         scenario_dir = os.path.abspath(model_dirs[0])  # a variant's files (maps, models) sit beside its source
     runs = plan_runs(loaded, output_root)
     document = _variant(request.scenario)

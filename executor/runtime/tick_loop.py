@@ -20,8 +20,8 @@ from coverage_engine.errors import OscError
 from coverage_engine.location import Location
 from coverage_engine.resolve.evaluate import EvaluationError
 from coverage_engine.resolve.model import Scenario
-from executor.actions.base import ActionError
 from coverage_engine.results.scenario_result import ScenarioResult
+from executor.actions.base import ActionError
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
 from executor.runtime.recording import Recorder

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
+from coverage_engine.suffixes import SCE_SUFFIX
 from executor.output.terminal import printable
 from executor.variation import report
 from executor.variation.report import echo
@@ -347,7 +348,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
 def _other_sce_files(folder: Path, ours: set[str]) -> int:
     """How many ``.sce`` files in ``folder`` this generation neither writes nor replaces."""
     try:
-        return sum(1 for name in os.listdir(folder) if name.endswith(".sce") and name not in ours)
+        return sum(1 for name in os.listdir(folder) if name.endswith(SCE_SUFFIX) and name not in ours)
     except OSError:
         return 0
 

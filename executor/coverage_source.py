@@ -19,6 +19,7 @@ from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarat
 from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
 from executor.batch.folder_history import batch_chain, latest_of
+from executor.batch.junit_read import JunitUnreadable, read_cases
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
 from store.queue import QueueStore
@@ -75,6 +76,8 @@ class _StoreRuns:
 
     def _run(self, row: StoredRun) -> RunInput:
         verdict = _VERDICTS.get(row.status, "error")
+        if row.failed_junit:
+            row = row._replace(reason=failure_message(row.failed_junit) or row.reason)
         if verdict == "pending":
             self.pending += 1
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
@@ -171,3 +174,13 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
             source.declare(header_domains(header))
     source.runs = iter(_StoreRuns(records, chain, source))
     return source
+
+
+def failure_message(junit_xml: str) -> str | None:
+    """The first failure's message in a job's JUnit XML: the reason the merged report gives the run (so the
+    store and the results folder name the same reason); None when there is none to read."""
+    try:
+        cases = read_cases(junit_xml)
+    except JunitUnreadable:
+        return None
+    return next((case.message for case in cases if case.outcome in ("failure", "error") and case.message), None)

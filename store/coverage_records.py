@@ -39,6 +39,7 @@ from sqlalchemy import (
     String,
     Table,
     Text,
+    case,
     delete,
     func,
     insert,
@@ -90,6 +91,8 @@ class StoredRun(NamedTuple):
     schema_id: int | None
     body: str | None
     variant_assignment: str | None
+    #: The job's own JUnit XML when it failed (its failure message is the run's reason), else None.
+    failed_junit: str | None = None
 
 
 def split_document(document: Mapping[str, Any]) -> tuple[str, str, str]:
@@ -286,6 +289,7 @@ class CoverageRecords:
             columns.append(assignment.label("variant_assignment"))
         else:
             columns.append(null().label("variant_assignment"))
+        columns.append(case((jobs.c.status == "failed", jobs.c.junit_xml), else_=null()).label("failed_junit"))
         last = -1
         try:
             while True:

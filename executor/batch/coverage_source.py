@@ -19,6 +19,7 @@ from coverage_engine.coverage.run_file import ItemDecl, parse_declarations, read
 from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE
+from coverage_engine.results.read import JunitUnreadable, read_cases
 from coverage_engine.results.verdicts import VERDICT_OF_STATE, Verdict
 from executor.batch.folder_history import batch_chain, latest_of
 from store.coverage_records import CoverageRecords, StoredRun
@@ -74,6 +75,8 @@ class _StoreRuns:
 
     def _run(self, row: StoredRun) -> RunInput:
         verdict = VERDICT_OF_STATE.get(row.status, Verdict.ERROR)
+        if row.failed_junit:
+            row = row._replace(reason=failure_message(row.failed_junit) or row.reason)
         if verdict is Verdict.PENDING:
             self.pending += 1
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
@@ -170,3 +173,13 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
             source.declare(header_domains(header))
     source.runs = iter(_StoreRuns(records, chain, source))
     return source
+
+
+def failure_message(junit_xml: str) -> str | None:
+    """The first failure's message in a job's JUnit XML: the reason the merged report gives the run (so the
+    store and the results folder name the same reason); None when there is none to read."""
+    try:
+        cases = read_cases(junit_xml)
+    except JunitUnreadable:
+        return None
+    return next((case.message for case in cases if case.problem and case.message), None)

@@ -112,3 +112,51 @@ def test_reading_opens_only_an_existing_store_and_changes_nothing(store_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT schema_version FROM store_meta")).scalar() == 1
     engine.dispose()
+
+
+_COVERAGE_CHILD = r'''
+import os, sys
+scenario, out = sys.argv[1], sys.argv[2]
+os.makedirs(out, exist_ok=True)
+with open(os.path.join(out, "test.xml"), "w") as handle:
+    handle.write('<testsuite tests="1"><testcase classname="c" name="sc"/></testsuite>')
+text = open(scenario).read().strip()
+if text:
+    with open(os.path.join(out, "coverage.json"), "w") as handle:
+        handle.write(text)
+'''
+
+
+def test_the_runner_records_a_jobs_file_and_refuses_a_bad_one(tmp_path):
+    """Through the real CLI (launched children): a valid coverage.json is kept in the store with the job, one that
+    does not validate is said with its location and left out (the job still passes), a job without one records
+    nothing."""
+    import subprocess
+    import sys
+
+    from batch_fixtures import CLI, cli_env
+
+    child = tmp_path / "child.py"
+    child.write_text(_COVERAGE_CHILD)
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    (inputs / "a.sce").write_text(json.dumps(_document(4.0)))
+    (inputs / "b.sce").write_text('{"format": "scenario-coverage/run"}')
+    (inputs / "c.sce").write_text("")
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    done = subprocess.run([CLI, "-i", str(inputs), "-o", str(tmp_path / "out"), "--store", url, "-j", "1", "--",
+                           sys.executable, "-S", str(child), "{SCENARIO}", "{OUTPUT_DIR}"],
+                          cwd=tmp_path, env=cli_env(tmp_path), capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "warning: b: coverage.json not kept: coverage.json:1:1: error: format_version: must be a whole number\n" \
+        in done.stderr
+    queue = QueueStore.open(url)
+    batch = queue.latest_batch()
+    assert batch is not None
+    jobs = {job.name: job for job in queue.jobs(batch.id)}
+    records = CoverageRecords.open_existing(url)
+    assert records.document(jobs["a"].id, "scenario-coverage/run", 1)["items"][0]["samples"] == [4.0]
+    assert records.document(jobs["b"].id, "f", 1) is None and records.document(jobs["c"].id, "f", 1) is None
+    assert [job.status for job in jobs.values()] == [JobState.PASSED] * 3
+    records.close()
+    queue.close()

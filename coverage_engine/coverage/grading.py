@@ -33,6 +33,7 @@ from coverage_engine.coverage.model import (
 from coverage_engine.coverage.plan import CoveragePlan
 from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
 from coverage_engine.files.sce_domains import InputDomain
+from coverage_engine.results.verdicts import FAILING
 
 #: Most cells a cross may have to be graded and drawn.
 MAX_CROSS_CELLS = 10_000
@@ -59,7 +60,7 @@ class _Buckets:
                  declared: Mapping[str, tuple[InputDomain, float | None]] | None = None) -> None:
         self.names = names
         self.declared = declared or {}
-        failing = [i for i, v in enumerate(verdicts) if v in ("failed", "error")]
+        failing = [i for i, v in enumerate(verdicts) if v in FAILING]
         failing.sort(key=lambda i: natural_key(names[i]))
         self.rank = array("q", range(len(names)))    # runs that did not fail keep their own order
         for position, run in enumerate(failing):

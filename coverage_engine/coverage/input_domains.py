@@ -191,7 +191,7 @@ class InputValueBuckets(DistinctBuckets):
         if ordered is None or len(ordered) <= INPUT_VALUES_LIMIT:
             ordered = ordered or seen
             return [Bucket(value_label(k), value=k) for k in ordered], {k: i for i, k in enumerate(ordered)}
-        numbers = [numeric_value(k) for k in ordered]
+        numbers = [numeric_value(k) or 0.0 for k in ordered]     # all numeric: numeric_order ordered them
         units = {unit_of(k) for k in ordered}
         ran = InputDomain("", low=numbers[0], high=numbers[-1], unit=units.pop() if len(units) == 1 else "",
                           count=len(ordered))

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from coverage_engine.coverage.buckets import value_label
 from coverage_engine.files.sce_domains import drawn_text
+from coverage_engine.results.verdicts import FAILING
 
 #: The prefix of the items of varied parameters (``input:<parameter>``).
 INPUT_ITEM_PREFIX = "input:"
@@ -184,7 +185,7 @@ class RunTable:
 
     @functools.cached_property
     def _failing(self) -> tuple[int, ...]:
-        ids = [i for i, v in enumerate(self.verdicts) if v in ("failed", "error")]
+        ids = [i for i, v in enumerate(self.verdicts) if v in FAILING]
         return tuple(sorted(ids, key=lambda i: [int(p) if p.isdigit() else p
                                                 for p in re.split(r"(\d+)", self.names[i])]))
 

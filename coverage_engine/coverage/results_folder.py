@@ -168,6 +168,7 @@ def _is_merged(report: Path) -> bool:
 def _single_run(root: Path, reader: _Reader) -> Iterator[RunInput]:
     coverage = reader.coverage(root)
     report = reader.file(root, RESULT_FILE)
+    verdict: str
     if report is not None:
         verdict, reason = run_verdict(report)
     elif coverage is not None:
@@ -231,6 +232,7 @@ def _unmerged(names: list[str], folders: dict[str, Path], reader: _Reader) -> It
         folder = folders[name]
         coverage = reader.coverage(folder)
         report = reader.file(folder, RESULT_FILE)
+        verdict: str
         if report is not None:
             verdict, reason = run_verdict(report)
         elif coverage is not None:

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.values import ValueType
+from coverage_engine.results.verdicts import Verdict
 
 FORMAT = "scenario-coverage/run"
 FORMAT_VERSION = 1
@@ -20,7 +21,7 @@ UNSAMPLED_VERSION = 2
 READABLE_VERSIONS = (FORMAT_VERSION, UNSAMPLED_VERSION)
 
 #: A run's verdicts (the batch's ``timeout`` is an ``error``; a run that did not start is ``skipped``).
-VERDICTS = ("passed", "failed", "error", "skipped")
+VERDICTS = tuple(verdict.value for verdict in Verdict if verdict is not Verdict.PENDING)
 
 #: Item kinds in the file (a cross is a ``cover`` with ``items``).
 ITEM_KINDS = ("cover", "record")

@@ -25,6 +25,7 @@ from coverage_engine.coverage.run_records import (
     RunInfo,
 )
 from coverage_engine.coverage.values import KINDS, ValueType
+from coverage_engine.results.files import COVERAGE_FILE
 
 
 class Invalid(Exception):
@@ -97,7 +98,7 @@ def _run_info(data: object) -> RunInfo:
         raise Invalid((*p, "duration"), "must not be negative")
     return RunInfo(
         scenario=_str(run["scenario"], (*p, "scenario"), limit=MAX_NAME_CHARS) or "",
-        verdict=verdict, source=_str(run.get("source"), (*p, "source"), optional=True),
+        verdict=str(verdict), source=_str(run.get("source"), (*p, "source"), optional=True),
         variant=_str(run.get("variant"), (*p, "variant"), optional=True, limit=MAX_NAME_CHARS),
         assignment=assignment, reason=_str(run.get("reason"), (*p, "reason"), optional=True),
         started=_str(run.get("started"), (*p, "started"), optional=True, limit=64), duration=duration)
@@ -230,7 +231,7 @@ def _check_samples(decls: list[ItemDecl], samples: list[list], key: str = "sampl
 
 
 def validate(doc: object) -> RunCoverage:
-    top = _obj(doc, (), "coverage.json")
+    top = _obj(doc, (), COVERAGE_FILE)
     if top.get("format") != FORMAT:
         raise Invalid(("format",) if "format" in top else (), f"not a run coverage file (format must be '{FORMAT}')")
     version = top.get("format_version")

@@ -13,9 +13,10 @@ from dataclasses import dataclass, field
 
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.files.sce_domains import InputDomain
+from coverage_engine.results.verdicts import Verdict
 
 #: Verdicts of a run in a report: the run file's four, plus ``pending`` (queued or running, not finished).
-REPORT_VERDICTS = ("passed", "failed", "error", "skipped", "pending")
+REPORT_VERDICTS = tuple(verdict.value for verdict in Verdict)
 
 
 @dataclass(slots=True)

@@ -14,6 +14,7 @@ from functools import cache
 from pathlib import Path
 
 from coverage_engine.errors import ImportResolutionError
+from coverage_engine.suffixes import OSC_SUFFIX
 
 GROUP = "scenario_execution.osc_libraries"
 OWN_DIR = Path(__file__).resolve().parent.parent / "osc"
@@ -74,7 +75,7 @@ def find_library(import_name: str) -> Path:
     """The ``.osc`` file that ``import <import_name>`` (e.g. ``osc.helpers``) reads."""
     name = library_name(import_name)
     if name in OWN_LIBRARIES:
-        own = OWN_DIR / f"{name}.osc"
+        own = OWN_DIR / f"{name}{OSC_SUFFIX}"
         if own.is_file():
             return own
     candidates = _registered().get(name, [])

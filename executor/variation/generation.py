@@ -237,7 +237,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     # Files of the new generation overwrite those of the same name in place (far cheaper than
     # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
     first = held.next_index if held is not None else 0     # --only-new numbers after the earlier runs
-    longest = f"{plan.path.stem}{max(first + plan.total - 1, 0)}.sce"
+    longest = f"{plan.path.stem}{max(first + plan.total - 1, 0)}{SCE_SUFFIX}"
     limit = _name_max(output_dir)
     if len(os.fsencode(longest)) > limit:
         raise OutputNameTooLong(

@@ -2,6 +2,13 @@
 
 ``from executor.actions import ActionBase`` is the import for plugin authors. It is resolved lazily,
 so looking up which actions exist (``executor.actions.registry``) does not import py_trees.
+
+``base``
+    the plugin API (:class:`ActionBase`, :class:`VariableHandle`).
+``registry``
+    an action's name to its class: built-ins first, then the ``scenario_execution.actions`` entry points.
+``log`` / ``compare`` / ``variables`` / ``run_process`` / ``process_log_check``
+    the built-in ``osc.helpers`` actions, one module each (``variables``: increment and decrement).
 """
 
 from __future__ import annotations

@@ -9,6 +9,13 @@ Modules, by responsibility:
 - :mod:`~executor.runtime.builder` — model → py_trees behaviours, action argument binding
 - :mod:`~executor.runtime.directives` / :mod:`~executor.runtime.modifiers` — wait/emit/call, modifiers
 - :mod:`~executor.runtime.context` — variables, events, clock of a running scenario
+- :mod:`~executor.runtime.simulation` — the wall and simulation clocks, the step-based simulation interface
+- :mod:`~executor.runtime.quiescence` — the earliest time a tick could change anything (ticks skipped until then)
+- :mod:`~executor.runtime.coverage_sampling` — ``cover()``/``record()`` samples and the run's ``coverage.json``
+- :mod:`~executor.runtime.recording` / :mod:`~executor.runtime.live` / :mod:`~executor.runtime.dot` /
+  :mod:`~executor.runtime.logger` — ``--bt-log``/``--tick-log``, ``--live-tree``, ``--dot``, the line logger
+- :mod:`~executor.runtime.external_methods` — the Python side of ``osc.helpers``' external methods
+- :mod:`~executor.runtime.parameter_locations` — a parameter-file error pointed at its key
 
 This package's ``__init__`` imports nothing, so light paths (``-n``) stay light.
 """

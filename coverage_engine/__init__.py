@@ -24,7 +24,13 @@ Subpackages in the order data flows; each imports only the ones below it (checke
 ``variation/``
     ``dimensions`` → ``template`` → ``plan`` (each value checked once) → ``output`` (``.sce`` files via ``writer``).
 
-Below them: ``errors`` (the one exception tree; every error carries a ``location``), ``location`` and
-``records`` (the ``@record`` decorator of syntax nodes and model records). ``osc/`` holds the standard
+``coverage/``
+    the coverage of runs: each run's ``coverage.json`` merged into one graded model, with its text, JSON
+    and HTML renderers (its map is in its ``__init__``); it reads results, never the language pipeline.
+
+Below them: ``errors`` (the one exception tree; every error carries a ``location``), ``location``,
+``domains`` (what a variation declared per varied parameter: the ``# domain`` lines of a ``.sce``
+header and a batch's ``declared.json``, which the ``.sce`` writer writes and the coverage model reads)
+and ``records`` (the ``@record`` decorator of syntax nodes and model records). ``osc/`` holds the standard
 ``.osc`` libraries (``osc.types``, ``osc.helpers``, ``osc.standard``, ``osc.robotics``).
 """

@@ -17,7 +17,7 @@ from collections.abc import Iterable, Iterator
 from coverage_engine.coverage.errors import RunFileError
 from coverage_engine.coverage.run_file import RUN_FILE, ItemDecl, parse_declarations, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
+from coverage_engine.domains import HEADER_CHARS, header_domains
 from executor.batch.folder_history import batch_chain, latest_of
 from executor.batch.junit_read import JunitUnreadable, read_cases
 from store.coverage_records import CoverageRecords, StoredRun

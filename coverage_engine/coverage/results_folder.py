@@ -26,7 +26,7 @@ from coverage_engine.coverage.junit_verdicts import JunitUnreadable, iter_suites
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RUN_FILE, RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import (
+from coverage_engine.domains import (
     DECLARED_FILE,
     HEADER_CHARS,
     InputDomain,

@@ -46,8 +46,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from coverage_engine.domains import InputDomain, header_domains
 from coverage_engine.errors import SceFormatError
-from coverage_engine.files.sce_domains import InputDomain, header_domains
 from coverage_engine.files.sce_plain import load_plain
 from coverage_engine.location import Location
 

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from sqlalchemy import Engine
 
-from coverage_engine.files.sce_domains import HEADER_CHARS
+from coverage_engine.domains import HEADER_CHARS
 from executor.batch.junit_read import JunitUnreadable, read_cases
 from executor.junit import failure_text, iso_timestamp
 from executor.junit_document import Case, document, suite_element

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from coverage_engine.coverage.atomic import write_text_atomically
-from coverage_engine.files.sce_domains import DECLARED_FILE, InputDomain, declared_text, header_domains
+from coverage_engine.domains import DECLARED_FILE, InputDomain, declared_text, header_domains
 from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8

@@ -15,22 +15,17 @@ rewrites it after each scenario, so a ``kill -9`` loses only the scenario that w
 from __future__ import annotations
 
 import os
-import tempfile
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from coverage_engine.coverage.atomic import write_text_atomically
 from executor.junit_document import Case, document, suite_element
 from executor.junit_names import file_stem, scenario_classname, variant_name
 from executor.results import ScenarioResult
 
 RESULT_FILE = "test.xml"
-
-# The process umask, read once (it can only be read by setting it), so reports get the usual mode.
-_UMASK = os.umask(0o022)
-os.umask(_UMASK)
-
 
 def write_report(path: str | os.PathLike[str], xml_text: str, *, durable: bool = True) -> None:
     """Write the report atomically: the old file is replaced only once the new one is complete.
@@ -40,25 +35,7 @@ def write_report(path: str | os.PathLike[str], xml_text: str, *, durable: bool =
     file; a batch of 10,000 runs would wait for 10,000 disk flushes); the merged report of a batch
     keeps it.
     """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".test.xml.", dir=target.parent)
-    try:
-        os.fchmod(fd, 0o666 & ~_UMASK)
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(xml_text)
-            handle.flush()
-            if durable:
-                os.fsync(handle.fileno())
-        os.replace(tmp, target)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        if isinstance(exc, OSError) and exc.filename is None:   # a failed write names no file: name the report
-            raise OSError(exc.errno, exc.strerror, str(target)) from None
-        raise
+    write_text_atomically(path, xml_text, durable=durable)
 
 
 def iso_timestamp(epoch: float) -> str:

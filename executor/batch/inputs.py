@@ -1,7 +1,7 @@
 """What a batch is made of: the scenario files of the input folder, the shard to keep, the launch command.
 
 The launch command is a list of argument templates; ``{SCENARIO}`` and ``{OUTPUT_DIR}`` are replaced
-inside each argument and no shell ever sees the result.
+inside each argument and no shell ever reads a value as code (see :mod:`executor.batch.launch_template`).
 """
 
 from __future__ import annotations
@@ -15,10 +15,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScenarios
+from executor.batch.launch_template import OUTPUT_DIR, SCENARIO, Template
 from store.jobs import JobSpec
 
-SCENARIO = "{SCENARIO}"
-OUTPUT_DIR = "{OUTPUT_DIR}"
 
 #: File name endings of scenario files (OpenSCENARIO DSL files and the variants written by scenario_variation).
 SCENARIO_SUFFIXES = (".sce", ".osc")
@@ -166,56 +165,9 @@ def check_command(command: Sequence[str], *, require_executable: bool = True) ->
     if missing:
         raise BadCommand(f"the launch command must contain {' and '.join(missing)} "
                          f"(got: {' '.join(command)})")
+    Template.of(command)                      # refuses a placeholder that a shell could read as code
     program = command[0]
     if require_executable and SCENARIO not in program and OUTPUT_DIR not in program:
         if shutil.which(program) is None:
             raise CommandNotFound(f"launch command not found: {program}")
     return tuple(command)
-
-
-#: Shells whose ``-c`` script argument gets shell-quoted values (as GNU parallel quotes its replacements).
-SHELLS = frozenset({"sh", "bash", "dash", "zsh", "ksh", "mksh", "ash", "busybox"})
-
-
-def substitute(command: Sequence[str], scenario: str, output_dir: str) -> list[str]:
-    """The argument list for one job: placeholders replaced inside every argument, in one pass.
-
-    One pass: a value is never searched for placeholders again, so a scenario path that contains
-    ``{OUTPUT_DIR}`` (a folder ``in{OUTPUT_DIR}/``) runs as it is named. In the script of
-    ``sh -c SCRIPT`` (or bash, dash, zsh, ksh), values are inserted shell-quoted, so a file named
-    ``a;touch x;b.osc`` is one word to the shell and never runs as code; write the placeholder
-    unquoted there (``sh -c 'run {SCENARIO}'``). Every other argument is passed to the program as
-    it is (no shell is involved).
-    """
-    import shlex
-
-    values = {SCENARIO: scenario, OUTPUT_DIR: output_dir}
-    script = _shell_script_index(command)
-    result = []
-    for position, arg in enumerate(command):
-        if position == script:
-            result.append(_PLACEHOLDER.sub(lambda m: shlex.quote(values[m.group()]), arg))
-        else:
-            result.append(_PLACEHOLDER.sub(lambda m: values[m.group()], arg))
-    return result
-
-
-_PLACEHOLDER = re.compile(re.escape(SCENARIO) + "|" + re.escape(OUTPUT_DIR))
-
-
-def _shell_script_index(command: Sequence[str]) -> int | None:
-    """Where the script of ``sh -c SCRIPT`` (any option order, e.g. ``bash -ec``) stands, if it is one."""
-    if not command or os.path.basename(command[0]) not in SHELLS:
-        return None
-    start = 1
-    if os.path.basename(command[0]) == "busybox":
-        if len(command) < 2 or command[1] not in SHELLS:
-            return None
-        start = 2
-    for position in range(start, len(command)):
-        arg = command[position]
-        if arg == "--" or not arg.startswith("-"):
-            return None
-        if "c" in arg[1:] and not arg.startswith("--"):
-            return position + 1 if position + 1 < len(command) else None
-    return None

@@ -21,6 +21,7 @@ from executor.batch.inputs import Shard, check_command, discover, job_specs, not
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
+from coverage_engine.coverage.atomic import write_output
 from executor.junit import write_report
 from executor.process import disk_full
 from store.jobs import Batch, BatchOptions
@@ -270,7 +271,7 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     variants = variant_infos(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
     xml_text = merged_report(store.iter_results(batch.id), variants, interrupted=interrupted)
     try:
-        write_report(path, xml_text)
+        write_output(path, xml_text)     # a device or FIFO is written in place, '-' is standard output
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
     return store.counts(batch.id)

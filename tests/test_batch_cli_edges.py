@@ -9,9 +9,8 @@ import sys
 import time
 from pathlib import Path
 
-from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
-
 import pytest
+from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
 
 from executor.batch.errors import BadCommand
 from executor.batch.inputs import check_command

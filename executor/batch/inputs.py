@@ -18,7 +18,6 @@ from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScena
 from executor.batch.launch_template import OUTPUT_DIR, SCENARIO, Template
 from store.jobs import JobSpec
 
-
 #: File name endings of scenario files (OpenSCENARIO DSL files and the variants written by scenario_variation).
 SCENARIO_SUFFIXES = (".sce", ".osc")
 

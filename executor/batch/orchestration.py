@@ -16,12 +16,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from coverage_engine.coverage.atomic import write_output
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
-from coverage_engine.coverage.atomic import write_output
 from executor.junit import write_report
 from executor.process import disk_full
 from store.jobs import Batch, BatchOptions

@@ -19,6 +19,7 @@ from typing import NoReturn
 import click
 
 from coverage_engine.errors import OscError
+from coverage_engine.printable import printable_lines
 
 EXIT_FAILED = 1
 EXIT_USAGE = 2
@@ -113,6 +114,7 @@ class Boundary:
             traceback.print_exc()
 
     def _say(self, message: str) -> None:
+        message = printable_lines(message)       # names and source lines come from files: never raw escapes
         if self.one_line_name is not None:
             # driver errors span several lines and SQLAlchemy adds a link line: one line for logs
             lines = [line.strip() for line in message.splitlines()

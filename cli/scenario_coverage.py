@@ -27,6 +27,7 @@ import click
 
 from cli.boundary import Boundary
 from cli.options import debug_option, store_option
+from coverage_engine.printable import printable
 from store.database import StoreError, StoreMissing
 
 if TYPE_CHECKING:
@@ -116,13 +117,14 @@ def report_command(results: str | None, store_url: str | None, batch_id: int | N
     report = _report(results, store_url, batch_id, plan_file)
     rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
     if rich:
-        render_text(report, Console(force_terminal=True, highlight=False), plain=False)
+        render_text(report, Console(force_terminal=True, highlight=False, markup=False), plain=False)
         return _gate(report, fail_under)
     import io
 
     buffer = io.StringIO()
-    render_text(report, Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False),
-                plain=True)
+    console = Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False,
+                      markup=False)
+    render_text(report, console, plain=True)
     text = "".join(line.rstrip() + "\n" for line in buffer.getvalue().splitlines())   # no padding in files and logs
     if output:
         from coverage_engine.coverage.atomic import write_output
@@ -151,7 +153,7 @@ def html_command(results: str | None, store_url: str | None, batch_id: int | Non
     if path == STDOUT:
         return _gate(report, fail_under)
     grade = "no graded item" if report.grade is None else f"grade {report.grade:.1f} %"
-    click.echo(f"wrote {path} ({grade}, {len(report.runs)} run(s))")
+    click.echo(printable(f"wrote {path} ({grade}, {len(report.runs)} run(s))"))
     return _gate(report, fail_under)
 
 

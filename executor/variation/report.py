@@ -12,6 +12,7 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
+from coverage_engine.printable import printable_lines
 from executor.terminal import wants_rich
 
 if TYPE_CHECKING:
@@ -22,8 +23,9 @@ RICH_PROGRESS_FROM = 2000
 
 
 def echo(message: str = "", err: bool = False) -> None:
-    """One line on stdout (``err``: stderr), flushed so it interleaves with the other stream."""
-    print(message, file=sys.stderr if err else sys.stdout, flush=True)
+    """One line on stdout (``err``: stderr), flushed so it interleaves with the other stream; names and
+    values in it came from files, so control characters are escaped (:func:`printable_lines`)."""
+    print(printable_lines(message), file=sys.stderr if err else sys.stdout, flush=True)
 
 
 def size_text(n: float) -> str:

@@ -10,6 +10,8 @@ reaches a terminal or a log.
 
 from __future__ import annotations
 
+import re
+
 #: The most characters of a quoted source line shown in a message (a window around the column of interest).
 MAX_SHOWN = 200
 #: The most characters of any one line of a message (a name, a path, a value quoted in it).
@@ -49,3 +51,19 @@ def clipped(line: str, column: int = 1, width: int = MAX_SHOWN) -> tuple[str, in
     head = "…" if start > 0 else ""
     tail = "…" if start + width < len(line) else ""
     return head + shown + tail, column - start + len(head)
+
+
+#: Characters XML 1.0 cannot carry (and PostgreSQL text cannot hold NUL); replaced before writing.
+_ILLEGAL_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def clean_text(text: str) -> str:
+    """``text`` without the characters XML 1.0 (and PostgreSQL) refuse, each replaced by U+FFFD: what a
+    name becomes in a JUnit report (so a reader matches a folder's name to its testsuite this way)."""
+    return _ILLEGAL_XML.sub("\ufffd", text)
+
+
+def surrogates_escaped(text: str) -> str:
+    """``text`` (a file name) with the bytes that are not UTF-8 (kept as surrogates) written ``\\xff``:
+    the text a store, a report and a JSON document can hold."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")

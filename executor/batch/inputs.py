@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from coverage_engine.printable import surrogates_escaped
 from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScenarios
 from executor.batch.launch_template import OUTPUT_DIR, SCENARIO, Template
 from store.jobs import JobSpec
@@ -119,8 +120,9 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
         resolved = _real_path(path, real_folders)
         if not _utf8(resolved):
             # The store (and every report) holds text: a name that is not UTF-8 is kept escaped, so this job
-            # alone fails (its file is not found under the escaped name) and the others run.
-            specs.append(JobSpec(name=_escaped(path.stem), scenario_path=_escaped(resolved), scenario_sha=sha))
+            # alone ends as an error saying so (see not_utf8_reason) and the others run.
+            specs.append(JobSpec(name=surrogates_escaped(path.stem), scenario_path=surrogates_escaped(resolved),
+                                 scenario_sha=sha))
             continue
         specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
     return specs
@@ -139,7 +141,22 @@ def _real_path(path: Path, real_folders: dict[Path, str]) -> str:
 
 def not_utf8(files: Sequence[Path]) -> list[str]:
     """The files whose names are not UTF-8, escaped for printing (their jobs will fail: rename them)."""
-    return [_escaped(str(p)) for p in files if not _utf8(str(p))]
+    return [surrogates_escaped(str(p)) for p in files if not _utf8(str(p))]
+
+
+_ESCAPED_BYTE = re.compile(r"\\x([89a-f][0-9a-f])")
+
+
+def not_utf8_reason(scenario_path: str) -> str | None:
+    """Why a job cannot run when its recorded path is a name that is not UTF-8, kept escaped (``c\\xff.osc``):
+    the escaped path does not exist and the file of the raw bytes does. None for every other path."""
+    if os.path.lexists(scenario_path) or not _ESCAPED_BYTE.search(scenario_path):
+        return None
+    raw = _ESCAPED_BYTE.sub(lambda m: chr(0xDC00 + int(m.group(1), 16)), scenario_path)
+    if not os.path.lexists(raw):
+        return None
+    return (f"the file name {scenario_path} is not UTF-8 (shown escaped); the store and the reports hold text: "
+            f"rename the file")
 
 
 def _utf8(text: str) -> bool:
@@ -150,9 +167,6 @@ def _utf8(text: str) -> bool:
     return True
 
 
-def _escaped(text: str) -> str:
-    """``text`` with bytes that are not UTF-8 (kept as surrogates) written as ``\\xff``."""
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def check_command(command: Sequence[str], *, require_executable: bool = True) -> tuple[str, ...]:

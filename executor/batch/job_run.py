@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from executor.batch.builtin_runner import BUILTIN_COMMAND
+from executor.batch.inputs import not_utf8_reason
 from executor.batch.launch_template import substitute
 from executor.batch.verdict import (
     COVERAGE_FILE,
@@ -212,6 +213,10 @@ class JobRun:
         coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
         if not self.batch.command and self.launcher is None:
             raise OSError("the built-in runner is not available")
+        unusable = not_utf8_reason(self.scenario_path)
+        if unusable is not None:                  # said in the job's log too, where people look first
+            (self.output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
+            return launch_failure(self.output_dir, time.time(), time.time(), unusable)
         builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
         launch = substitute(self.batch.command or builtin, self.scenario_path, str(self.output_dir))
         child = ChildProcess(list(launch.argv), str(self.output_dir / LOG_FILE), cwd=self.cwd,

@@ -56,7 +56,7 @@ def _assignment_from_sce(path: str) -> dict[str, object]:
         if os.path.getsize(path) > MAX_SCE_BYTES:
             return {}
         with open(path, encoding="utf-8") as handle:
-            doc = load_bounded(handle.read(), yaml.SafeLoader)
+            doc = load_bounded(handle.read())
     except (OSError, UnicodeDecodeError, yaml.YAMLError, YamlLimitError):
         return {}
     assignment = doc.get("assignment") if isinstance(doc, dict) else None

@@ -106,9 +106,15 @@ def is_sce_text(head: str) -> bool:
 def _load_yaml(text: str, path: str):
     import yaml
 
-    from coverage_engine.yaml_bounds import DuplicateKeyError, YamlLimitError, load_bounded, with_unique_keys
+    from coverage_engine.yaml_bounds import (
+        SAFE_LOADER,
+        DuplicateKeyError,
+        YamlLimitError,
+        load_bounded,
+        with_unique_keys,
+    )
 
-    loader = with_unique_keys(getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    loader = with_unique_keys(SAFE_LOADER)
     try:
         return load_bounded(text, loader)
     except DuplicateKeyError as exc:

@@ -27,12 +27,12 @@ from typing import Any
 
 import yaml
 
-#: Largest YAML text read, in bytes.
-MAX_YAML_BYTES = 64 * 1024 * 1024
-#: Most nodes a document may stand for with its aliases expanded.
-MAX_EXPANDED_NODES = 1_000_000
-#: Most bytes of scalar text a document may stand for with its aliases expanded.
-MAX_EXPANDED_BYTES = 64 * 1024 * 1024
+from coverage_engine.limits import MAX_EXPANDED_BYTES, MAX_EXPANDED_NODES, MAX_YAML_BYTES, mib
+
+__all__ = ["MAX_EXPANDED_BYTES", "MAX_EXPANDED_NODES", "MAX_YAML_BYTES", "SAFE_LOADER", "YamlLimitError",
+           "check_expansion", "check_size", "compose_bounded", "load_all_bounded", "load_bounded",
+           "with_unique_keys", "DuplicateKeyError"]
+
 
 #: The loader for every YAML we read: libyaml's (about 10x faster on large scalars) where PyYAML was
 #: built with it, else the pure-Python one; both only build plain values, and the same bounds apply.
@@ -51,7 +51,7 @@ class YamlLimitError(ValueError):
 def check_size(text: str | bytes) -> None:
     """Refuse a text larger than :data:`MAX_YAML_BYTES`."""
     if len(text) > MAX_YAML_BYTES:
-        raise YamlLimitError(f"larger than the limit of {MAX_YAML_BYTES // (1024 * 1024)} MiB for a YAML file")
+        raise YamlLimitError(f"larger than the limit of {mib(MAX_YAML_BYTES)} for a YAML file")
 
 
 def check_expansion(root: yaml.Node | None) -> None:
@@ -80,7 +80,7 @@ def check_expansion(root: yaml.Node | None) -> None:
         if nodes > MAX_EXPANDED_NODES or size > MAX_EXPANDED_BYTES:
             mark = node.start_mark
             what = (f"{MAX_EXPANDED_NODES:,} values" if nodes > MAX_EXPANDED_NODES
-                    else f"{MAX_EXPANDED_BYTES // (1024 * 1024)} MiB of text")
+                    else f"{mib(MAX_EXPANDED_BYTES)} of text")
             raise YamlLimitError(f"this YAML stands for more than {what} once its aliases (*name) are "
                                  "expanded; refusing it (an alias bomb?)", mark.line + 1, mark.column + 1)
         sizes[key] = (nodes, size)

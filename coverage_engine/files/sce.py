@@ -48,6 +48,7 @@ from pathlib import Path
 
 from coverage_engine.errors import SceFormatError
 from coverage_engine.files.sce_plain import load_plain
+from coverage_engine.limits import MAX_YAML_BYTES, mib
 from coverage_engine.location import Location
 
 #: The format version this release writes.
@@ -247,7 +248,10 @@ def read_sce(path: str | os.PathLike) -> SceDocument:
             key = (path, stat.st_size, stat.st_mtime_ns, stat.st_ino)
             if key in _recent:
                 return _recent[key]
-            text = handle.read()
+            if stat.st_size > MAX_YAML_BYTES:
+                raise SceFormatError(f"{path}: {stat.st_size:,} bytes, larger than the limit of "
+                                     f"{mib(MAX_YAML_BYTES)} for a .sce file")
+            text = handle.read(MAX_YAML_BYTES + 1)
     except FileNotFoundError as exc:
         raise SceFormatError(f"{path}: no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:

@@ -101,22 +101,12 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
     """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
     specs = []
     # A shard hashes every file to place it, holding only the hashes (not 666,469 files' contents).
-    kept = shard.select([hashlib.sha256(path.read_bytes()).hexdigest() + "\0" + path.name for path in files]) \
-        if shard is not None else None
+    kept = shard.select([_content(path)[0] + "\0" + path.name for path in files]) if shard is not None else None
     real_folders: dict[Path, str] = {}      # each input folder resolved once, not once per file
     for position, path in enumerate(files):
         if kept is not None and position not in kept:
             continue
-        data = path.read_bytes()
-        sha = hashlib.sha256(data).hexdigest()
-        text = None
-        if len(data) <= MAX_STORED_TEXT:
-            try:
-                text = data.decode("utf-8")
-            except UnicodeDecodeError:
-                text = None
-            if text is not None and "\x00" in text:
-                text = None
+        sha, text = _content(path)
         resolved = _real_path(path, real_folders)
         if not _utf8(resolved):
             # The store (and every report) holds text: a name that is not UTF-8 is kept escaped, so this job
@@ -126,6 +116,23 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
             continue
         specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
     return specs
+
+
+def _content(path: Path) -> tuple[str, str | None]:
+    """The file's SHA-256 and, when it is small UTF-8 text without NUL, the text itself. A large file is
+    hashed in chunks, never held whole (a stray 500 MB file costs a 1 MiB buffer, not 500 MB)."""
+    with open(path, "rb") as handle:
+        head = handle.read(MAX_STORED_TEXT + 1)
+        digest = hashlib.sha256(head)
+        if len(head) > MAX_STORED_TEXT:
+            for chunk in iter(lambda: handle.read(MAX_STORED_TEXT), b""):
+                digest.update(chunk)
+            return digest.hexdigest(), None
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError:
+        return digest.hexdigest(), None
+    return digest.hexdigest(), None if "\x00" in text else text
 
 
 def _real_path(path: Path, real_folders: dict[Path, str]) -> str:

@@ -148,6 +148,23 @@ def list_assignments(plan: VariationPlan) -> int:
     return 1 if skipped else 0
 
 
+class Ticker:
+    """Progress of a long computation before anything is written (a covering array): a plain line on
+    stderr every :data:`Progress.PLAIN_EVERY` seconds, nothing when it is quick."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self._started = time.monotonic()
+        self._next = self._started + Progress.PLAIN_EVERY
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.monotonic()
+        if now < self._next or not total:
+            return
+        self._next = now + Progress.PLAIN_EVERY
+        echo(f"... {self.what}: {done * 100 / total:.0f} % after {duration_text(now - self._started)}", err=True)
+
+
 class Progress:
     """A rich progress bar on a terminal for long generations; elsewhere a plain line every few seconds."""
 

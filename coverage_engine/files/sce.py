@@ -207,8 +207,8 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     if parameters is not None and not isinstance(parameters, dict):
         raise SceFormatError("malformed .sce file: 'parameters' must be a mapping", where)
     index = data.get("index")
-    if index is not None and (not isinstance(index, int) or isinstance(index, bool)):
-        raise SceFormatError("malformed .sce file: 'index' must be an integer", where)
+    if index is not None and (not isinstance(index, int) or isinstance(index, bool) or index < 0):
+        raise SceFormatError(f"malformed .sce file: 'index' must be an integer, 0 or more (got {index!r})", where)
     model = data["model"]
     scenario = data["scenario"]
     if scenario:

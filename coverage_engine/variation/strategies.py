@@ -102,6 +102,10 @@ def draw_continuous(plan: VariationPlan, options: StrategyOptions) -> None:
         return
     if options.samples is None:
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
+    if not plan.sizes:        # every point would be the same variant: N copies of the scenario
+        raise StrategyError(f"--strategy {options.strategy} draws points over the varied parameters, and "
+                            f"{plan.path.name} varies none; nothing to draw", Location(str(plan.path), 0, 0),
+                            hint="vary a parameter (keep(it.x in [...]) or a range), or run the scenario as it is")
     sizes = plan.sizes                     # choices per axis: the dimensions, then the documents if any
     columns = unit_columns(options.strategy, options.samples, len(sizes), options.seed, options.blocks)
     count = len(columns[0]) if columns else options.samples

@@ -124,15 +124,15 @@ def _vertical(rows: list[list[int]], earlier: Sequence[int], new: int, allowed: 
                 low = mask & -mask
                 w = low.bit_length() - 1
                 mask ^= low
-                row = _shared_row(with_free, axis, u, new, w)
-                if row is None:
-                    row = [FREE] * n
-                    rows.append(row)
-                    with_free.setdefault(w, []).append(row)
-                elif row[new] == FREE:
-                    with_free[FREE].remove(row)
-                    with_free.setdefault(w, []).append(row)
-                row[axis], row[new] = u, w
+                shared = _shared_row(with_free, axis, u, new, w)
+                if shared is None:
+                    shared = [FREE] * n
+                    rows.append(shared)
+                    with_free.setdefault(w, []).append(shared)
+                elif shared[new] == FREE:
+                    with_free[FREE].remove(shared)
+                    with_free.setdefault(w, []).append(shared)
+                shared[axis], shared[new] = u, w
             open_[axis][u] = 0
 
 

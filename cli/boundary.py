@@ -82,6 +82,7 @@ class Boundary:
             return EXIT_INTERRUPTED
         except click.ClickException as exc:
             if self.one_line_name is None:
+                exc.message = printable_lines(exc.message)     # (a name from the command line, escaped)
                 exc.show()
             else:
                 self._say(f"error: {exc.format_message()}")

@@ -82,8 +82,11 @@ class Boundary:
             return EXIT_INTERRUPTED
         except click.ClickException as exc:
             if self.one_line_name is None:
-                exc.message = printable_lines(exc.message)     # (a name from the command line, escaped)
-                exc.show()
+                import io
+
+                shown = io.StringIO()                    # (a name from the command line, escaped)
+                exc.show(file=shown)
+                click.echo(printable_lines(shown.getvalue().rstrip("\n")), err=True)
             else:
                 self._say(f"error: {exc.format_message()}")
             return exc.exit_code

@@ -332,7 +332,7 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
 @store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
 @click.option("-o", "--output", default="test.xml", show_default=True, type=click.Path(dir_okay=False),
-              help="File for the merged JUnit report.")
+              help="File for the merged JUnit report ('-': standard output).")
 @click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option
 def report_command(store_url, batch_id, output, as_json, debug):
@@ -353,12 +353,12 @@ def report_command(store_url, batch_id, output, as_json, debug):
     if failed is not None:
         import json
 
-        click.echo(json.dumps({"batch": batch.id, "report": os.path.abspath(output),
+        click.echo(json.dumps({"batch": batch.id, "report": output if output == "-" else os.path.abspath(output),
                                "counts": {state.value: count for state, count in counts.items()},
                                "exit_code": orchestration.exit_code(counts),
                                "not_passed": [item.as_dict() for item in failed]}, indent=2))
-    else:
-        click.echo(orchestration.summary_line(batch, counts, output))
+    else:   # with -o - the report is standard output, and the summary goes to standard error
+        click.echo(orchestration.summary_line(batch, counts, output), err=output == "-")
     return orchestration.exit_code(counts)
 
 

@@ -27,6 +27,7 @@ import click
 
 from cli.boundary import Boundary
 from cli.options import debug_option, store_option
+from coverage_engine.printable import printable
 from store.database import StoreError, StoreMissing
 
 if TYPE_CHECKING:
@@ -107,7 +108,7 @@ def _output_path(output: str) -> str:
 
 @click.command(context_settings=CONTEXT)
 @_common
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE ('-': standard output).")
 def report_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                    fail_under: float | None, debug: bool, output: str | None) -> int:
     """Print the coverage of RESULTS (one or more results folders, merged): items, buckets, grades, holes and
@@ -120,18 +121,19 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
     report = _report(results, store_url, batch_id, plan_file)
     rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
     if rich:
-        render_text(report, Console(force_terminal=True, highlight=False), plain=False)
+        render_text(report, Console(force_terminal=True, highlight=False, markup=False), plain=False)
         return _gate(report, fail_under)
     import io
 
     buffer = io.StringIO()
-    render_text(report, Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False),
-                plain=True)
+    console = Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False,
+                      markup=False)
+    render_text(report, console, plain=True)
     text = "".join(line.rstrip() + "\n" for line in buffer.getvalue().splitlines())   # no padding in files and logs
     if output:
-        from coverage_engine.coverage.atomic import write_text_atomically
+        from coverage_engine.coverage.atomic import write_output
 
-        write_text_atomically(_output_path(output), text)
+        write_output(_output_path(output), text)
     else:
         sys.stdout.write(text)
     return _gate(report, fail_under)
@@ -140,20 +142,22 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
 @click.command(context_settings=CONTEXT)
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="coverage.html", show_default=True,
-              help="The HTML file to write (one self-contained file).")
+              help="The HTML file to write (one self-contained file; '-': standard output).")
 def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
-    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.coverage.atomic import STDOUT, write_output
     from coverage_engine.coverage.render_html import render_html
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
-    folder = os.path.dirname(os.path.abspath(path))
+    folder = os.getcwd() if path == STDOUT else os.path.dirname(os.path.abspath(path))
     text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
-    write_text_atomically(path, text)
+    write_output(path, text)
+    if path == STDOUT:
+        return _gate(report, fail_under)
     grade = "no graded item" if report.grade is None else f"grade {report.grade:.1f} %"
-    click.echo(f"wrote {path} ({grade}, {len(report.runs)} run(s))")
+    click.echo(printable(f"wrote {path} ({grade}, {len(report.runs)} run(s))"))
     return _gate(report, fail_under)
 
 
@@ -164,15 +168,11 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
-    from coverage_engine.coverage.atomic import write_text_atomically
+    from coverage_engine.coverage.atomic import write_output
     from coverage_engine.coverage.render_json import render_json
 
     report = _report(results, store_url, batch_id, plan_file)
-    text = render_json(report)
-    if output == "-":
-        sys.stdout.write(text)
-    else:
-        write_text_atomically(_output_path(output), text)
+    write_output(_output_path(output), render_json(report))
     return _gate(report, fail_under)
 
 

@@ -23,7 +23,7 @@ from sqlalchemy.sql import ClauseElement
 
 from store import queue_statements as sql
 from store import states
-from store.database import StoreError, ensure_schema, open_engine, open_existing
+from store.database import StoreError, driver_error, ensure_schema, open_engine, open_existing
 from store.driver_statements import DriverStatement
 from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
@@ -82,7 +82,8 @@ class QueueStore(QueueReads):
             has_batches = inspect(engine).has_table(batches.name)
         except SQLAlchemyError as exc:
             engine.dispose()
-            raise StoreError(f"cannot use store {engine.url.render_as_string(hide_password=True)}: {exc}") from exc
+            raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"
+                             ) from exc
         if not has_batches:
             engine.dispose()
             raise StoreError(f"the store {engine.url.render_as_string(hide_password=True)} holds no batch")
@@ -117,7 +118,7 @@ class QueueStore(QueueReads):
             self._drop()
             if exc.connection_invalidated or isinstance(exc.orig, (OSError,)) or _is_transient(exc):
                 raise StoreUnavailable(f"store {self.url} unavailable: {exc.orig}") from exc
-            raise StoreError(f"store {self.url}: {exc.orig}") from exc
+            raise StoreError(driver_error(exc, self.url)) from exc
 
     # ----------------------------------------------------------------- transitions
     @staticmethod

@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from coverage_engine.coverage.atomic import write_text_atomically
+from coverage_engine.coverage.atomic import write_output, write_text_atomically
 from coverage_engine.domains import DECLARED_FILE, InputDomain, declared_text, header_domains
 from executor.batch import folder_history
 from executor.batch.errors import BatchError, NothingToResume
@@ -24,7 +24,6 @@ from executor.batch.inputs import Shard, check_command, discover, job_specs, not
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
-from executor.junit import write_report
 from executor.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
@@ -298,8 +297,9 @@ def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[
     variants = variants_of(store.engine, [j.scenario_path for j in listed])
     xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
     try:
-        write_report(path, xml_text)
-        write_declared(Path(path).parent, variants.values())
+        write_output(path, xml_text)     # a device or FIFO is written in place, '-' is standard output
+        if str(path) != "-" and os.path.realpath(Path(path).parent) == os.path.realpath(batch.output_dir):
+            write_declared(Path(path).parent, variants.values())   # the batch's own results folder only
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
     return folder_history.counts_of(listed)

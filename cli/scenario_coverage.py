@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from cli.boundary import Boundary
+from cli.coverage_history import diff_command, history_command
 from cli.options import debug_option, store_option
 from store.database import StoreError, StoreMissing
 
@@ -178,7 +179,8 @@ def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 
 @click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.group(context_settings=CONTEXT,
-             commands={"report": report_command, "html": html_command, "json": json_command})
+             commands={"report": report_command, "html": html_command, "json": json_command,
+                       "history": history_command, "diff": diff_command})
 def group() -> None:
     """Report the coverage of a batch's results folder (or of one run's folder, or of a batch in the store)."""
 

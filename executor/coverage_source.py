@@ -20,6 +20,7 @@ from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.files.sce_domains import header_domains
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
+from store.jobs import Batch
 from store.queue import QueueStore
 
 _decode = json.JSONDecoder().raw_decode
@@ -46,8 +47,8 @@ def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
 
 
 class _StoreRuns:
-    def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource) -> None:
-        self.records, self.batch_id, self.source = records, batch_id, source
+    def __init__(self, records: CoverageRecords, batch_id: int, source: RunSource, own: bool = True) -> None:
+        self.records, self.batch_id, self.source, self.own = records, batch_id, source, own
         self.declarations: dict[int, tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]] = {}
         self.pending = 0
         self.from_disk = 0
@@ -127,7 +128,8 @@ class _StoreRuns:
             for row in self.records.iter_batch(self.batch_id):
                 yield self._run(row)
         finally:
-            self.records.close()
+            if self.own:
+                self.records.close()
         if self.pending:
             self.source.complete = False
             self.source.notes.append(f"the batch is still running: {self.pending} job(s) have not finished; "
@@ -149,9 +151,14 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
         batch = _pick_batch(queue, results, batch_id)
     finally:
         queue.close()
-    records = CoverageRecords.open_existing(url)
+    return batch_source(CoverageRecords.open_existing(url), batch)
+
+
+def batch_source(records: CoverageRecords, batch: Batch, *, own: bool = True) -> RunSource:
+    """The runs of ``batch`` read through ``records``; ``own``: close the records once the runs are read
+    (False for records on an engine the caller keeps, the batch runner's)."""
     source = RunSource(label=f"batch {batch.id} in {records.url}", runs=iter(()), root=batch.output_dir)
     for header in records.variant_headers(batch.id):
         source.declare(header_domains(header))
-    source.runs = iter(_StoreRuns(records, batch.id, source))
+    source.runs = iter(_StoreRuns(records, batch.id, source, own))
     return source

@@ -39,6 +39,12 @@ class BatchOptions:
     shard: str | None = None
     #: Built-in runner only: every job runs step-based on this simulation (``scenario_execution --simulation``).
     simulation: str | None = None
+    #: ``--repeat``: attempts of each variant (each its own job, named ``<variant>@<k>``); with ``until_fail``
+    #: the attempts not started yet are cancelled at the variant's first failure.
+    repeat: int = 1
+    until_fail: bool = False
+    #: ``--pass-rate``: the share of a variant's attempts that must pass for the variant to pass.
+    pass_rate: float = 1.0
 
     def to_json(self) -> str:
         data = asdict(self)

@@ -16,10 +16,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from executor.batch.batch_outcome import BatchOutcome, batch_outcome
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report
 from executor.batch.progress import Reporter
+from executor.batch.repeats import expand_specs
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.junit import write_report
 from executor.process import disk_full
@@ -75,7 +77,7 @@ def create_batch(store: QueueStore, request: BatchRequest, *, mode: str = "local
         print(f"warning: {name}: the file name is not UTF-8; its job fails (rename the file)", file=sys.stderr)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
-    specs = job_specs(files, request.shard)
+    specs = expand_specs(job_specs(files, request.shard), request.options.repeat)
     options = request.options
     if request.shard is not None:
         options = replace(options, shard=f"{request.shard.index}/{request.shard.count}")
@@ -127,7 +129,8 @@ def write_rerun_report(store: QueueStore, earlier: Batch, batch: Batch, path: st
 #: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
 OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
                 "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
-                "grace": "--grace", "shard": "--shard", "simulation": "--simulation"}
+                "grace": "--grace", "shard": "--shard", "simulation": "--simulation", "repeat": "--repeat",
+                "pass_rate": "--pass-rate"}
 
 
 def _shown(value: object) -> str:
@@ -215,6 +218,8 @@ class LocalRun:
     disk_full: str | None = None
     #: Why the merged report could not be written (a full disk), else None.
     report_error: str | None = None
+    #: The batch per variant (flaky ones, repeated attempts), when its report was written.
+    outcome: BatchOutcome | None = None
 
 
 #: How the merged report names a run that a full disk stopped.
@@ -239,12 +244,12 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     if summary.disk_full is not None and interrupted is None:
         interrupted = DISK_FULL_NAME
     try:
-        counts = write_batch_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
+        outcome = write_outcome_report(store, batch, Path(batch.output_dir) / REPORT_FILE, interrupted=interrupted)
     except BatchError as exc:
         if summary.disk_full is None and not (exc.__cause__ and disk_full(exc.__cause__)):
             raise
         return LocalRun(store.counts(batch.id), signum, summary.disk_full or batch.output_dir, str(exc))
-    return LocalRun(counts, signum, summary.disk_full)
+    return LocalRun(outcome.counts, signum, summary.disk_full, outcome=outcome)
 
 
 def check_report_path(path: str | os.PathLike[str]) -> None:
@@ -261,19 +266,32 @@ def check_report_path(path: str | os.PathLike[str]) -> None:
 
 def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
                        interrupted: str | None = None) -> dict[JobState, int]:
-    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts.
+    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts
+    (of variants: with ``--repeat`` a variant's attempts count once).
 
     ``interrupted`` (``Ctrl-C``, ``SIGTERM``) says the batch was stopped: its unfinished jobs are in the
     report too, as errors (stopped while running) or skipped (not started).
     """
+    return write_outcome_report(store, batch, path, interrupted=interrupted).counts
+
+
+def write_outcome_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
+                         interrupted: str | None = None) -> BatchOutcome:
+    """:func:`write_batch_report`, returning the batch per variant (:mod:`executor.batch.batch_outcome`);
+    a finished batch's figures are kept for ``scenario_coverage history`` (:mod:`executor.batch.history`)."""
     check_report_path(path)
+    outcome = batch_outcome(store, batch)
     variants = variant_infos(store.engine, [j.scenario_path for j in store.jobs(batch.id)])
-    xml_text = merged_report(store.iter_results(batch.id), variants, interrupted=interrupted)
+    xml_text = merged_report(outcome.jobs, variants, interrupted=interrupted, notes=outcome.notes)
     try:
         write_report(path, xml_text)
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
-    return store.counts(batch.id)
+    if interrupted is None:
+        from executor.batch.history import record_batch_summary
+
+        record_batch_summary(store, batch, outcome)
+    return outcome
 
 
 #: Exit code of a batch that did not pass, or could not go on (a full disk).
@@ -293,11 +311,17 @@ def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
     return 0 if counts[JobState.PASSED] == total else EXIT_FAILED
 
 
-def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:
-    """One line saying how the batch fared."""
+def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None,
+                 outcome: BatchOutcome | None = None) -> str:
+    """One line saying how the batch fared (per variant, and its attempts' pass rate, with ``--repeat``)."""
     total = sum(counts.values())
     parts = [f"{counts[s]} {s.value}" for s in JobState if counts[s]]
-    text = f"batch {batch.id}: {total} job(s): " + ", ".join(parts or ["none"])
+    what = "job(s)" if batch.options.repeat <= 1 else f"variant(s) x {batch.options.repeat} attempts"
+    text = f"batch {batch.id}: {total} {what}: " + ", ".join(parts or ["none"])
+    if outcome is not None and batch.options.repeat > 1 and outcome.runs:
+        text += f"; {outcome.runs_passed} of {outcome.runs} attempt(s) passed ({100 * outcome.runs_passed / outcome.runs:.0f} %)"
+    if outcome is not None and outcome.flaky:
+        text += f"; {len(outcome.flaky)} flaky"
     if report:
         text += f"; report {report}"
     return text

@@ -15,10 +15,14 @@ from __future__ import annotations
 import json
 import os
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from cli.options import debug_option, store_option
+
+if TYPE_CHECKING:
+    from coverage_engine.coverage.model import CoverageReport
 
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
@@ -101,3 +105,32 @@ def diff_command(a: str, b: str, store_url: str | None, as_json: bool, debug: bo
         for line in diff_lines(result):
             click.echo(printable(line))
     return EXIT_NEW_FAILURE if result.new_failures else 0
+
+
+def with_history(report: CoverageReport, results: tuple[str, ...], store_url: str | None,
+                 batch_id: int | None) -> CoverageReport:
+    """``report`` with what the HTML shows beyond its batch (``report.extra``: history, current, flaky):
+    from the store when it is read (``store_url`` given), else from the one results folder's
+    ``history.json`` and merged ``test.xml``; several folders have no one trend."""
+    import dataclasses
+
+    if store_url is not None or not results:
+        from executor.batch.history import store_extras
+
+        extra = store_extras(store_url, results[0] if results else None, batch_id)
+    elif len(results) == 1 and os.path.isdir(results[0]):
+        from coverage_engine.coverage.diff import folder_outcomes
+        from coverage_engine.coverage.junit_verdicts import JunitUnreadable
+        from coverage_engine.coverage.trend import read_history_file
+
+        points, current = read_history_file(results[0])
+        try:
+            outcomes = folder_outcomes(results[0])
+        except JunitUnreadable:
+            outcomes = {}
+        flaky = tuple((o.name, o.detail or "passed and failed in the store's batches")
+                      for o in outcomes.values() if o.flaky)
+        extra = {"history": tuple(points), "current": current, "flaky": flaky}
+    else:
+        return report
+    return dataclasses.replace(report, extra={**report.extra, **extra})

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from cli.boundary import Boundary
-from cli.coverage_history import diff_command, history_command
+from cli.coverage_history import diff_command, history_command, with_history
 from cli.options import debug_option, store_option
 from store.database import StoreError, StoreMissing
 
@@ -150,6 +150,7 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
+    report = with_history(report, results, store_url if _store_named() or not results else None, batch_id)
     folder = os.path.dirname(os.path.abspath(path))
     text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
     write_text_atomically(path, text)

@@ -30,7 +30,9 @@ _VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout"
              "cancelled": "skipped", "queued": "pending", "running": "pending"}
 
 
-def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
+def pick_batch(queue: QueueStore, results: str | None, batch_id: int | None) -> Batch:
+    """The batch a report reads: ``batch_id``, else the latest whose output folder is ``results``, else the
+    latest batch; :class:`StoreError` when there is none."""
     if batch_id is not None:
         return queue.batch(batch_id)
     if results is not None:
@@ -148,7 +150,7 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
     """
     queue = QueueStore.open_existing(url)
     try:
-        batch = _pick_batch(queue, results, batch_id)
+        batch = pick_batch(queue, results, batch_id)
     finally:
         queue.close()
     return batch_source(CoverageRecords.open_existing(url), batch)

@@ -31,6 +31,8 @@ class VariantOutcome:
     verdict: str
     reason: str | None = None
     flaky: bool = False
+    #: How its attempts went (``passed 7 of 10 attempt(s)``), when it was repeated.
+    detail: str | None = None
 
     @property
     def failing(self) -> bool:
@@ -176,6 +178,9 @@ def folder_outcomes(path: str | os.PathLike[str]) -> dict[str, VariantOutcome]:
         verdict = suite.verdict
         if verdict == "passed" and _STATUS.get(status, status) in FAILING:
             verdict = _STATUS.get(status, status)
-        found[suite.name] = VariantOutcome(suite.name, verdict, suite.reason or suite.properties.get("reason"),
-                                           suite.properties.get("flaky") == "true")
+        props = suite.properties
+        detail = f"passed {props['repeat.passed']} of {props['repeat.ran']} attempt(s)" \
+            if "repeat.passed" in props and "repeat.ran" in props else None
+        found[suite.name] = VariantOutcome(suite.name, verdict, suite.reason or props.get("reason"),
+                                           props.get("flaky") == "true", detail)
     return found

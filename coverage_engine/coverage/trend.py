@@ -9,6 +9,7 @@ batch marked.
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -72,6 +73,30 @@ def read_history_document(text: str) -> tuple[list[TrendPoint], int | None]:
     current = data.get("current")
     return [TrendPoint.from_dict(row) for row in rows if isinstance(row, dict)], \
         current if isinstance(current, int) else None
+
+
+#: Largest ``history.json`` read (200 batches take about 60 kB).
+MAX_HISTORY_BYTES = 4 * 1024 * 1024
+
+
+def read_history_file(folder: str) -> tuple[list[TrendPoint], int | None]:
+    """The trend a batch left in its results folder (``history.json``); nothing when there is none, it is
+    a link, larger than :data:`MAX_HISTORY_BYTES` or not a history document (the report goes on without)."""
+    try:
+        fd = os.open(os.path.join(folder, HISTORY_FILE), os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except OSError:
+        return [], None
+    try:
+        with os.fdopen(fd, "rb") as handle:
+            data = handle.read(MAX_HISTORY_BYTES + 1)
+    except OSError:
+        return [], None
+    if len(data) > MAX_HISTORY_BYTES:
+        return [], None
+    try:
+        return read_history_document(data.decode("utf-8"))
+    except (ValueError, TypeError):
+        return [], None
 
 
 def _pct(value: float | None) -> str:

@@ -50,12 +50,22 @@ class FailureGroup:
                 "runs": list(self.names), "common_values": dict(self.common)}
 
 
+def reason_location(reason: str) -> str | None:
+    """The ``file:line`` a reason names (its first), or None."""
+    found = _LOCATION.search(" ".join(reason.split()))
+    return f"{found.group(1)}:{found.group(2)}" if found else None
+
+
 def reason_key(reason: str) -> tuple[str, str | None]:
-    """``(masked message, file:line)`` of a reason: the kind of failure it is."""
+    """``(masked message, location)`` of a reason: the kind of failure it is. The location is the file's
+    name (folders dropped, numbers masked: ``cut#.sce``, as every variant of a source is its own file with
+    the same lines) and the line."""
     text = " ".join(reason.split())
     found = _LOCATION.search(text)
-    location = f"{found.group(1)}:{found.group(2)}" if found else None
+    location = None
     if found:
+        name = found.group(1).replace("\\", "/").rsplit("/", 1)[-1]
+        location = f"{_NUMBER.sub('#', name)}:{found.group(2)}"
         text = (text[:found.start()] + text[found.end():]).strip()
     text = _QUOTED.sub("'…'", text)
     text = _HEX.sub("0x…", text)
@@ -85,7 +95,8 @@ def group_failures(failures: Iterable[Failure]) -> list[FailureGroup]:
     for failure in failures:
         groups.setdefault(reason_key(failure.reason or "no reason given"), []).append(failure)
     ordered = sorted(groups.items(), key=lambda entry: -len(entry[1]))
-    return [FailureGroup(message, location, " ".join(members[0].reason.split())[:MESSAGE_CHARS],
+    return [FailureGroup(message, location and reason_location(members[0].reason),
+                         " ".join(members[0].reason.split())[:MESSAGE_CHARS],
                          tuple(f.name for f in members), _common(members))
             for (message, location), members in ordered]
 
@@ -97,8 +108,7 @@ def triage_lines(groups: list[FailureGroup], *, names: int = 5, limit: int = 10)
     total = sum(group.count for group in groups)
     lines = [f"--- {total} failure(s) of {len(groups)} kind(s) ---"]
     for group in groups[:limit]:
-        where = f"{group.location}: " if group.location else ""
-        lines.append(f"{group.count:>5} x {where}{group.example}")
+        lines.append(f"{group.count:>5} x {group.example}")
         more = f" and {group.count - names} more" if group.count > names else ""
         lines.append(f"        runs: {', '.join(group.names[:names])}{more}")
         if group.common:

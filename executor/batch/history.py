@@ -102,3 +102,20 @@ def store_side(store: QueueStore, batch: Batch) -> Side:
             reason = attempt_reason(job) if job.status in FINAL else None
             outcomes[job.name] = VariantOutcome(job.name, verdict, reason, job.name in flaky)
     return Side(f"batch {batch.id} ({batch.output_dir})", outcomes, batch_report(store, batch))
+
+
+def store_extras(url: str | None, results: str | None, batch_id: int | None) -> dict[str, object]:
+    """What the HTML report shows beyond the batch, for a stored batch: the store's batches (``history``,
+    up to :data:`KEPT_BATCHES`), the batch's id (``current``) and its flaky variants (``flaky``)."""
+    from executor.batch.flaky import variant_records
+    from executor.coverage_source import pick_batch
+
+    store = QueueStore.open_existing(url)
+    try:
+        batch = pick_batch(store, results, batch_id)
+        points = [p for p in history_points(store, last=KEPT_BATCHES) if p.batch <= batch.id]
+        records = variant_records(store, store.jobs(batch.id), batch.id)
+    finally:
+        store.close()
+    flaky = [(name, record.text()) for name, record in records.items() if record.flaky]
+    return {"history": tuple(points), "current": batch.id, "flaky": tuple(flaky)}

@@ -17,12 +17,12 @@ from store.states import FINAL
 
 
 class OutcomeCount(NamedTuple):
-    """How many finished jobs named ``name`` with content ``sha`` ended in ``status``."""
+    """How many (``total``) finished jobs named ``name`` with content ``sha`` ended in ``status``."""
 
     name: str
     sha: str
     status: str
-    count: int
+    total: int
 
 
 def outcome_counts(engine: Engine, batch_id: int) -> list[OutcomeCount]:

@@ -227,3 +227,42 @@ def test_triage_groups_20_failures_of_3_kinds_into_3_groups(tmp_path):
     assert run("scenario_coverage", "html", "results", "-o", str(page), cwd=tmp_path).returncode == 0
     text = page.read_text()
     assert "Failures by kind (20 in 3 group(s))" in text and "kind=3" in text
+
+
+def test_the_html_trend_chart_in_chromium(tmp_path):
+    """Three batches of one store: the page of the third shows three bars, two lines, the third batch marked,
+    with nothing loaded but the file; the chart is screenshot for CI's artefacts."""
+    from test_coverage_html import CHROMIUM, _playwright, artifacts
+
+    if not os.path.exists(CHROMIUM):
+        raise AssertionError(f"no Chromium at {CHROMIUM} (apt-get install chromium; .ci/run does)")
+    sync_playwright = _playwright()
+    store = f"sqlite:///{tmp_path / 's.db'}"
+    for batch, failing in enumerate((0, 1, 3), 1):
+        _verdict_files(tmp_path / "in", failing)
+        run("scenario_batch_execution", "-i", "in", "-o", f"results{batch}", "--store", store, cwd=tmp_path)
+    page_file = tmp_path / "report.html"
+    done = run("scenario_coverage", "html", "results3", "-o", str(page_file), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    problems, requests = [], []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        try:
+            page = browser.new_page(viewport={"width": 1100, "height": 900})
+            page.on("console", lambda m: problems.append(m.text) if m.type in ("error", "warning") else None)
+            page.on("pageerror", lambda e: problems.append(str(e)))
+            page.on("request", lambda r: requests.append(r.url))
+            page.goto(page_file.as_uri(), wait_until="load")
+            chart = page.locator("#trend svg.trend")
+            assert chart.locator("rect.runs").count() == 3 and chart.locator("rect.current").count() == 1
+            assert len(chart.locator("polyline.pass-rate").get_attribute("points").split()) == 3
+            assert "batch 3: 4 run(s), pass rate 25.0 %" in chart.locator("rect.runs title").nth(2).text_content()
+            box = chart.bounding_box()
+            assert box is not None and box["width"] > 300 and box["height"] > 150
+            assert "Failures by kind (3 in 1 group(s))" in page.inner_text("#triage h2")
+            shot = artifacts() / "history-trend.png"
+            page.locator("#trend").screenshot(path=str(shot))
+        finally:
+            browser.close()
+    assert problems == [] and requests == [page_file.as_uri()]
+    assert shot.stat().st_size > 5_000

@@ -185,4 +185,5 @@ class InputValueBuckets(DistinctBuckets):
         ran = InputDomain("", low=numbers[0], high=numbers[-1], unit=units.pop() if len(units) == 1 else "",
                           count=len(ordered))
         axis = range_axis(ran)
-        return axis.buckets(), {k: axis.index(n) or 0 for k, n in zip(ordered, numbers, strict=True)}
+        return axis.buckets(), {k: (axis.index(n) or 0) if n is not None else 0
+                               for k, n in zip(ordered, numbers, strict=True)}

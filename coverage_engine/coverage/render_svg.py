@@ -23,7 +23,8 @@ VERDICT_COLOURS = {"passed": "#2e9d5b", "failed": "#d23f3f", "error": "#e08a1e",
 def _ticks(low: float, high: float) -> list[float]:
     width = nice_width(high - low, 5) if high > low else 1.0
     first = -(-low // width) * width
-    ticks, value = [], first
+    ticks: list[float] = []
+    value = first
     while value <= high + width * 1e-9 and len(ticks) < 12:
         ticks.append(round(value, 10))
         value += width

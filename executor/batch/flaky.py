@@ -43,7 +43,7 @@ def variant_records(store: QueueStore, jobs: Iterable[Job], batch_id: int) -> di
         if (variant, row.sha) not in keys:
             continue
         tally = tallies.setdefault(variant, [0, 0])
-        tally[0 if row.status == "passed" else 1] += row.count
+        tally[0 if row.status == "passed" else 1] += row.total
     return {variant: VariantRecord(variant, passed, failed) for variant, (passed, failed) in tallies.items()}
 
 

@@ -69,7 +69,8 @@ def attempt_reason(job: Job) -> str | None:
     if job.status is JobState.PASSED:
         return None
     problem = next((case for case in child_cases(job) if case.problem and case.message), None)
-    return " ".join((problem.message if problem is not None else job.reason or job.status.value).split())
+    text = problem.message if problem is not None and problem.message else job.reason or job.status.value
+    return " ".join(text.split())
 
 
 def attempt_outcome(job: Job) -> str:

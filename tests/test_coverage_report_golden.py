@@ -238,8 +238,8 @@ def test_the_html_report_shows_every_section(braking):
     done = coverage("html", "results", "--plan", "plan.yaml", "-o", "coverage.html", cwd=braking)
     assert done.returncode == 0 and done.stdout.startswith("wrote coverage.html"), done.stderr
     seen = _browser_page(braking / "coverage.html")
-    assert seen["groups"] == ["Items at a glance", "Varied parameters", "Cover items", "Record items",
-                              "Failing runs (5)"]
+    assert seen["groups"] == ["Failures by kind (5 in 2 group(s))", "Items at a glance", "Varied parameters",
+                              "Cover items", "Record items", "Failing runs (5)"]
     assert seen["scatters"] == 1 and seen["points"] == 12
     assert seen["failed points"] == 2 and seen["error points"] == 3
     assert seen["heat maps"] == 6 and seen["not sampled cells"] == 2

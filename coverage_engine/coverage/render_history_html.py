@@ -45,9 +45,10 @@ def triage_section(report: CoverageReport) -> str:
 
 def trend_section(report: CoverageReport) -> str:
     """Pass rate, grade and runs per batch of the store as a chart, the current batch marked; the rows
-    in a table below (what the chart's points say, for reading exact figures)."""
+    in a table below (what the chart's points say, for reading exact figures). One batch is no trend:
+    the section needs two."""
     points = report.extra.get("history") or ()
-    if not points:
+    if len(points) < 2:
         return ""
     current = report.extra.get("current")
     table = escape("\n".join(history_lines(points[-30:], current)))

@@ -96,7 +96,8 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
     earlier = store.latest_batch(output_dir=output_dir)
     if earlier is None:
         raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url}: nothing to rerun")
-    files = [Path(job.scenario_path) for job in store.jobs(earlier.id) if job.status is not JobState.PASSED]
+    files = list(dict.fromkeys(Path(job.scenario_path) for job in store.jobs(earlier.id)
+                               if job.status is not JobState.PASSED))    # a repeated variant's attempts: once
     missing = [str(f) for f in files if not f.is_file()]
     if missing:
         raise BatchError(f"--rerun-failed: scenario file(s) gone since batch {earlier.id}: {', '.join(missing[:3])}")
@@ -104,7 +105,7 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
         return earlier, None
     batch = store.create_batch(mode="local", input_dir=earlier.input_dir, output_dir=output_dir,
                                host=socket.gethostname(), command=earlier.command, options=earlier.options,
-                               specs=job_specs(files))
+                               specs=expand_specs(job_specs(files), earlier.options.repeat))
     return earlier, batch
 
 

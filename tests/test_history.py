@@ -115,6 +115,7 @@ def test_until_fail_stops_a_variant_at_its_first_failure(tmp_path):
     assert outcomes == ["passed"] * (first - 1) + ["failed"] + ["not run"] * (20 - first)
     assert props["repeat.ran"] == str(first)
     assert not (tmp_path / "results" / f"flaky@{first + 1}").exists()
+    assert_valid(tmp_path / "results" / "test.xml")
     bad = run("scenario_batch_execution", "-i", "in", "-o", "r", "--repeat", "until-fail:x", cwd=tmp_path)
     assert bad.returncode == 2 and "neither a number nor 'until-fail:N'" in bad.stderr
 
@@ -156,6 +157,13 @@ def test_diff_names_exactly_the_regression_and_exits_1(tmp_path):
     assert [r["name"] for r in by_id["regressions"]] == failing
     back = run("scenario_coverage", "diff", "tuesday", "monday", cwd=tmp_path)
     assert back.returncode == 0 and "0 regression(s), 1 fixed" in back.stdout
+    # a variant dropped: gone, and the bucket of its value lost
+    dropped = sorted((tmp_path / "out").glob("*.sce"))[2]
+    dropped.unlink()
+    assert run("scenario_batch_execution", "-i", "out", "-o", "wednesday", "--store", store, cwd=tmp_path).returncode == 1
+    gone = json.loads(run("scenario_coverage", "diff", "tuesday", "wednesday", "--json", cwd=tmp_path).stdout)
+    assert [r["name"] for r in gone["gone"]] == [dropped.stem] and gone["regressions"] == gone["new"] == []
+    assert gone["items"] == [{"item": "input:gap_check.gap", "gained": [], "lost": ["3"]}]
     missing = run("scenario_coverage", "diff", "monday", "nowhere", cwd=tmp_path)
     assert missing.returncode == 1 and "nowhere: error: no such results folder" in missing.stderr
     assert "Traceback" not in missing.stderr
@@ -266,3 +274,16 @@ def test_the_html_trend_chart_in_chromium(tmp_path):
             browser.close()
     assert problems == [] and requests == [page_file.as_uri()]
     assert shot.stat().st_size > 5_000
+
+
+def test_a_failure_kind_masks_numbers_quoted_names_and_the_variant_file():
+    from coverage_engine.coverage.triage import Failure, group_failures, reason_key
+
+    assert reason_key("'compare' (/o/cut12.sce:17:9) failed: 0.5 > 1.0 is False") == \
+        ("'…' () failed: # > # is False", "cut#.sce:17")
+    assert reason_key("actor 'npc1' at 0x7f3a collided") == ("actor '…' at 0x… collided", None)
+    groups = group_failures([Failure("a", "x.osc:3:1: speed 84.2 above 80", {"s.road": "dry", "s.v": 1.0}),
+                             Failure("b", "x.osc:3:1: speed 91.7 above 80", {"s.road": "dry", "s.v": 2.0}),
+                             Failure("c", "x.osc:4:1: speed 91.7 above 80", {"s.road": "dry"})])
+    assert [(g.count, g.location, g.common) for g in groups] == [(2, "x.osc:3", (("s.road", "dry"),)),
+                                                                  (1, "x.osc:4", ())]

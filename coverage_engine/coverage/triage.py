@@ -68,8 +68,7 @@ def reason_key(reason: str) -> tuple[str, str | None]:
         location = f"{_NUMBER.sub('#', name)}:{found.group(2)}"
         text = (text[:found.start()] + text[found.end():]).strip()
     text = _QUOTED.sub("'…'", text)
-    text = _HEX.sub("0x…", text)
-    text = _NUMBER.sub("#", text)
+    text = _NUMBER.sub("#", _HEX.sub("\x00", text)).replace("\x00", "0x…")   # hex ids first: 0x7f3a, not #x#f#a
     return text[:MESSAGE_CHARS], location
 
 

@@ -29,6 +29,18 @@ PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
 
+def _count(kind: click.ParamType, text: str, given: object, other: str, param, ctx) -> int:
+    """``text`` as a whole number of at least 1; else the option's usage error (``other``: the other form
+    the option takes)."""
+    try:
+        number = int(text)
+    except ValueError:
+        kind.fail(f"{given!r} is neither a number nor {other}", param, ctx)
+    if number < 1:
+        kind.fail(f"{number} must be at least 1", param, ctx)
+    return number
+
+
 class JobsType(click.ParamType):
     """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs this process may use."""
 
@@ -41,13 +53,7 @@ class JobsType(click.ParamType):
             from executor.batch.builtin_runner import usable_cpus
 
             return usable_cpus()
-        try:
-            number = int(value)
-        except ValueError:
-            self.fail(f"{value!r} is neither a number nor 'auto'", param, ctx)
-        if number < 1:
-            self.fail(f"{number} must be at least 1", param, ctx)
-        return number
+        return _count(self, str(value), value, "'auto'", param, ctx)
 
 
 class ShardType(click.ParamType):
@@ -79,13 +85,7 @@ class RepeatType(click.ParamType):
         text = str(value).strip()
         until_fail = text.lower().startswith("until-fail:")
         number = text.split(":", 1)[1] if until_fail else text
-        try:
-            count = int(number)
-        except ValueError:
-            self.fail(f"{value!r} is neither a number nor 'until-fail:N'", param, ctx)
-        if count < 1:
-            self.fail(f"{count} must be at least 1", param, ctx)
-        return count, until_fail
+        return _count(self, number, value, "'until-fail:N'", param, ctx), until_fail
 
 
 def _check_command(command) -> None:

@@ -16,6 +16,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from coverage_support import chromium_page
 from tests_schema import assert_valid
 
 BIN = Path(sys.executable).parent
@@ -240,11 +241,8 @@ def test_triage_groups_20_failures_of_3_kinds_into_3_groups(tmp_path):
 def test_the_html_trend_chart_in_chromium(tmp_path):
     """Three batches of one store: the page of the third shows three bars, two lines, the third batch marked,
     with nothing loaded but the file; the chart is screenshot for CI's artefacts."""
-    from test_coverage_html import CHROMIUM, _playwright, artifacts
+    from test_coverage_html import artifacts
 
-    if not os.path.exists(CHROMIUM):
-        raise AssertionError(f"no Chromium at {CHROMIUM} (apt-get install chromium; .ci/run does)")
-    sync_playwright = _playwright()
     store = f"sqlite:///{tmp_path / 's.db'}"
     for batch, failing in enumerate((0, 1, 3), 1):
         _verdict_files(tmp_path / "in", failing)
@@ -252,26 +250,16 @@ def test_the_html_trend_chart_in_chromium(tmp_path):
     page_file = tmp_path / "report.html"
     done = run("scenario_coverage", "html", "results3", "-o", str(page_file), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
-    problems, requests = [], []
-    with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        try:
-            page = browser.new_page(viewport={"width": 1100, "height": 900})
-            page.on("console", lambda m: problems.append(m.text) if m.type in ("error", "warning") else None)
-            page.on("pageerror", lambda e: problems.append(str(e)))
-            page.on("request", lambda r: requests.append(r.url))
-            page.goto(page_file.as_uri(), wait_until="load")
-            chart = page.locator("#trend svg.trend")
-            assert chart.locator("rect.runs").count() == 3 and chart.locator("rect.current").count() == 1
-            assert len(chart.locator("polyline.pass-rate").get_attribute("points").split()) == 3
-            assert "batch 3: 4 run(s), pass rate 25.0 %" in chart.locator("rect.runs title").nth(2).text_content()
-            box = chart.bounding_box()
-            assert box is not None and box["width"] > 300 and box["height"] > 150
-            assert "Failures by kind (3 in 1 group(s))" in page.inner_text("#triage h2")
-            shot = artifacts() / "history-trend.png"
-            page.locator("#trend").screenshot(path=str(shot))
-        finally:
-            browser.close()
+    with chromium_page(page_file, width=1100) as (page, problems, requests):
+        chart = page.locator("#trend svg.trend")
+        assert chart.locator("rect.runs").count() == 3 and chart.locator("rect.current").count() == 1
+        assert len(chart.locator("polyline.pass-rate").get_attribute("points").split()) == 3
+        assert "batch 3: 4 run(s), pass rate 25.0 %" in chart.locator("rect.runs title").nth(2).text_content()
+        box = chart.bounding_box()
+        assert box is not None and box["width"] > 300 and box["height"] > 150
+        assert "Failures by kind (3 in 1 group(s))" in page.inner_text("#triage h2")
+        shot = artifacts() / "history-trend.png"
+        page.locator("#trend").screenshot(path=str(shot))
     assert problems == [] and requests == [page_file.as_uri()]
     assert shot.stat().st_size > 5_000
 

@@ -21,6 +21,8 @@ from tests_schema import assert_valid
 
 BIN = Path(sys.executable).parent
 
+pytest_plugins = ["batch_stores"]            # store_url: a fresh SQLite file, a fresh PostgreSQL database
+
 DRAW = '''import os, random
 def draw() -> float:
     return random.Random("seed-" + os.environ.get("SCENARIO_ATTEMPT", "0")).random()
@@ -181,8 +183,8 @@ def _verdict_files(folder: Path, failing: int, total: int = 4) -> None:
                                                  f"        compare({index + 1}, \">\", {limit})\n")
 
 
-def test_history_shows_one_row_per_batch_with_its_pass_rate(tmp_path):
-    store = f"sqlite:///{tmp_path / 's.db'}"
+def test_history_shows_one_row_per_batch_with_its_pass_rate(tmp_path, store_url):
+    store = store_url
     for batch, failing in enumerate((0, 1, 3), 1):
         _verdict_files(tmp_path / "in", failing)
         done = run("scenario_batch_execution", "-i", "in", "-o", f"results{batch}", "--store", store, cwd=tmp_path)
@@ -200,6 +202,11 @@ def test_history_shows_one_row_per_batch_with_its_pass_rate(tmp_path):
     # the results folder keeps the trend up to its batch
     kept = json.loads((tmp_path / "results2" / "history.json").read_text())
     assert [b["batch"] for b in kept["batches"]] == [1, 2] and kept["current"] == 2
+    # diff by batch ids: case1 and case2 pass in batch 2 and fail in batch 3, case0 fails in both
+    compared = run("scenario_coverage", "diff", "2", "3", "--store", store, "--json", cwd=tmp_path)
+    assert compared.returncode == 1
+    document = json.loads(compared.stdout)
+    assert [r["name"] for r in document["regressions"]] == ["case1", "case2"] and document["still_failing"] == 1
     empty = run("scenario_coverage", "history", "--store", f"sqlite:///{tmp_path / 'none.db'}", cwd=tmp_path)
     assert empty.returncode == 2 and "Traceback" not in empty.stderr
 

@@ -108,16 +108,17 @@ def diff_command(a: str, b: str, store_url: str | None, as_json: bool, debug: bo
 
 
 def with_history(report: CoverageReport, results: tuple[str, ...], store_url: str | None,
-                 batch_id: int | None) -> CoverageReport:
+                 batch_id: int | None, *, trend: bool = True) -> CoverageReport:
     """``report`` with what the HTML shows beyond its batch (``report.extra``: history, current, flaky):
     from the store when it is read (``store_url`` given), else from the one results folder's
-    ``history.json`` and merged ``test.xml``; several folders have no one trend."""
+    ``history.json`` and merged ``test.xml``; several folders have no one trend. Without ``trend`` only the
+    flaky variants (the text and JSON reports)."""
     import dataclasses
 
     if store_url is not None or not results:
         from executor.batch.history import store_extras
 
-        extra = store_extras(store_url, results[0] if results else None, batch_id)
+        extra = store_extras(store_url, results[0] if results else None, batch_id, trend=trend)
     elif len(results) == 1 and os.path.isdir(results[0]):
         from coverage_engine.coverage.diff import folder_outcomes
         from coverage_engine.coverage.junit_verdicts import JunitUnreadable

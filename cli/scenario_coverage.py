@@ -88,6 +88,12 @@ def _report(folders: tuple[str, ...], store_url: str | None, batch_id: int | Non
     return build_report(source, plan)
 
 
+def _history_store(results: tuple[str, ...], store_url: str | None) -> str | None:
+    """The store the report's history and flaky variants come from: the one read (``--store``, or no
+    RESULTS), else None (the results folder's own files)."""
+    return store_url if _store_named() or not results else None
+
+
 def _gate(report: CoverageReport, fail_under: float | None) -> int:
     """``--fail-under``: one comparison on the grade as the report shows it (one decimal), as coverage.py
     compares at its display precision: a report saying 90.0 % never fails ``--fail-under 90``."""
@@ -119,6 +125,7 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
     from executor.terminal import wants_rich
 
     report = _report(results, store_url, batch_id, plan_file)
+    report = with_history(report, results, _history_store(results, store_url), batch_id, trend=False)
     rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
     if rich:
         render_text(report, Console(force_terminal=True, highlight=False), plain=False)
@@ -150,7 +157,7 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
-    report = with_history(report, results, store_url if _store_named() or not results else None, batch_id)
+    report = with_history(report, results, _history_store(results, store_url), batch_id)
     folder = os.path.dirname(os.path.abspath(path))
     text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
     write_text_atomically(path, text)
@@ -170,7 +177,7 @@ def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
     from coverage_engine.coverage.render_json import render_json
 
     report = _report(results, store_url, batch_id, plan_file)
-    text = render_json(report)
+    text = render_json(with_history(report, results, _history_store(results, store_url), batch_id, trend=False))
     if output == "-":
         sys.stdout.write(text)
     else:

@@ -97,6 +97,9 @@ def test_repeat_10_gives_a_pass_rate_within_the_binomial_bound_and_calls_the_var
     cover = run("scenario_coverage", "report", "results", cwd=tmp_path)
     assert cover.stdout.splitlines()[0].startswith(f"Scenario coverage of results: 10 run(s) ({passed} passed, "
                                                    f"{10 - passed} failed)  [complete]")
+    assert cover.stdout.splitlines()[-3:] == ["Flaky variants (1)", f"  flaky - passed {passed} of 10 attempt(s)", ""]
+    as_json = json.loads(run("scenario_coverage", "json", "--store", store, cwd=tmp_path).stdout)
+    assert as_json["flaky"] == [{"name": "flaky", "detail": f"passed {passed} of 10 run(s) in this store"}]
     status = run("scenario_batch_execution", "status", "--store", store, "--list", "flaky", "--json", cwd=tmp_path)
     assert json.loads(status.stdout)["flaky"] == [{"name": "flaky", "passed": passed, "not_passed": 10 - passed}]
 

@@ -104,16 +104,17 @@ def store_side(store: QueueStore, batch: Batch) -> Side:
     return Side(f"batch {batch.id} ({batch.output_dir})", outcomes, batch_report(store, batch))
 
 
-def store_extras(url: str | None, results: str | None, batch_id: int | None) -> dict[str, object]:
-    """What the HTML report shows beyond the batch, for a stored batch: the store's batches (``history``,
-    up to :data:`KEPT_BATCHES`), the batch's id (``current``) and its flaky variants (``flaky``)."""
+def store_extras(url: str | None, results: str | None, batch_id: int | None, *,
+                 trend: bool = True) -> dict[str, object]:
+    """What the reports show beyond the batch, for a stored batch: the store's batches (``history``, up to
+    :data:`KEPT_BATCHES`; only with ``trend``), the batch's id (``current``) and its flaky variants."""
     from executor.batch.flaky import variant_records
     from executor.coverage_source import pick_batch
 
     store = QueueStore.open_existing(url)
     try:
         batch = pick_batch(store, results, batch_id)
-        points = [p for p in history_points(store, last=KEPT_BATCHES) if p.batch <= batch.id]
+        points = [p for p in history_points(store, last=KEPT_BATCHES) if p.batch <= batch.id] if trend else []
         records = variant_records(store, store.jobs(batch.id), batch.id)
     finally:
         store.close()

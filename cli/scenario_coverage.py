@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from cli.boundary import Boundary
+from cli.coverage_history import diff_command, history_command, with_history
 from cli.options import debug_option, store_option
 from coverage_engine.printable import printable
 from store.database import StoreError, StoreMissing
@@ -88,6 +89,12 @@ def _report(folders: tuple[str, ...], store_url: str | None, batch_id: int | Non
     return build_report(source, plan)
 
 
+def _history_store(results: tuple[str, ...], store_url: str | None) -> str | None:
+    """The store the report's history and flaky variants come from: the one read (``--store``, or no
+    RESULTS), else None (the results folder's own files)."""
+    return store_url if _store_named() or not results else None
+
+
 def _gate(report: CoverageReport, fail_under: float | None) -> int:
     """``--fail-under``: one comparison on the grade as the report shows it (one decimal), as coverage.py
     compares at its display precision: a report saying 90.0 % never fails ``--fail-under 90``."""
@@ -119,6 +126,7 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
     from executor.terminal import wants_rich
 
     report = _report(results, store_url, batch_id, plan_file)
+    report = with_history(report, results, _history_store(results, store_url), batch_id, trend=False)
     rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
     if rich:
         render_text(report, Console(force_terminal=True, highlight=False, markup=False), plain=False)
@@ -151,6 +159,7 @@ def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
+    report = with_history(report, results, _history_store(results, store_url), batch_id)
     folder = os.getcwd() if path == STDOUT else os.path.dirname(os.path.abspath(path))
     text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
     write_output(path, text)
@@ -172,13 +181,15 @@ def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
     from coverage_engine.coverage.render_json import render_json
 
     report = _report(results, store_url, batch_id, plan_file)
-    write_output(_output_path(output), render_json(report))
+    text = render_json(with_history(report, results, _history_store(results, store_url), batch_id, trend=False))
+    write_output(_output_path(output), text)
     return _gate(report, fail_under)
 
 
 @click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.group(context_settings=CONTEXT,
-             commands={"report": report_command, "html": html_command, "json": json_command})
+             commands={"report": report_command, "html": html_command, "json": json_command,
+                       "history": history_command, "diff": diff_command})
 def group() -> None:
     """Report the coverage of a batch's results folder (or of one run's folder, or of a batch in the store)."""
 

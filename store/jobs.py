@@ -42,6 +42,12 @@ class BatchOptions:
     #: The batch this one adds to (``--rerun-failed``, ``--only-new``): the folder's report keeps that
     #: batch's verdicts (and those it continues) for the jobs this one does not run; None: a fresh start.
     continues: int | None = None
+    #: ``--repeat``: attempts of each variant (each its own job, named ``<variant>@<k>``); with ``until_fail``
+    #: the attempts not started yet are cancelled at the variant's first failure.
+    repeat: int = 1
+    until_fail: bool = False
+    #: ``--pass-rate``: the share of a variant's attempts that must pass for the variant to pass.
+    pass_rate: float = 1.0
 
     def to_json(self) -> str:
         data = asdict(self)

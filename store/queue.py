@@ -226,10 +226,19 @@ class QueueStore(QueueReads):
             return len(self._move(conn, Transition.HALT, JobState.CANCELLED, [jobs.c.batch_id == batch_id],
                                   dict(reason=reason)))
 
+    def halt_jobs(self, batch_id: int, names: Sequence[str], reason: str) -> int:
+        """Cancel the named jobs of the batch that have not started (``--repeat until-fail`` after a
+        failed attempt: that variant's later attempts); returns how many."""
+        with self._tx() as conn:
+            return len(self._move(conn, Transition.HALT, JobState.CANCELLED,
+                                  [jobs.c.batch_id == batch_id, jobs.c.name.in_(list(names))], dict(reason=reason)))
+
     def resume(self, batch_id: int) -> int:
         """Queue the batch's cancelled jobs again; returns how many."""
         with self._tx() as conn:
-            return len(self._move(conn, Transition.RESUME, JobState.QUEUED, [jobs.c.batch_id == batch_id],
+            return len(self._move(conn, Transition.RESUME, JobState.QUEUED,
+                                  [jobs.c.batch_id == batch_id,
+                                   func.coalesce(jobs.c.reason, "") != states.UNTIL_FAIL_REASON],
                                   dict(reason=None)))
 
     def release(self, worker: WorkerIdentity, job_ids: Iterable[int]) -> int:

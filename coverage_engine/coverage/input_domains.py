@@ -196,4 +196,5 @@ class InputValueBuckets(DistinctBuckets):
         ran = InputDomain("", low=min(numbers), high=max(numbers), unit=units.pop() if len(units) == 1 else "",
                           count=len(ordered))
         axis = range_axis(ran)
-        return axis.buckets(), {k: axis.index(n) or 0 for k, n in zip(ordered, numbers, strict=True)}
+        return axis.buckets(), {k: (axis.index(n) or 0) if n is not None else 0
+                               for k, n in zip(ordered, numbers, strict=True)}

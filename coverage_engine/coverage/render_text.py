@@ -350,3 +350,9 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
         if section is not None:
             console.print(section)
             console.print()
+    flaky = report.extra.get("flaky") or ()
+    if flaky:                  # variants that passed and failed (their attempts, or the store's batches)
+        console.print(style.styled(f"Flaky variants ({len(flaky)})", "yellow"))
+        for name, what in flaky:
+            console.print(Text(f"  {name} - {what}"))
+        console.print()

@@ -210,7 +210,7 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
             if job_folder is not None:
                 name = job_folder.name                 # the job's own name, as the store has it
             if folder is None:
-                reader.missing_folders += 1
+                reader.missing_folders += "repeat.count" not in suite.properties
             elif any((folder / f).exists() and (folder / f).stat().st_mtime > report_time + 1
                      for f in (REPORT_FILE, RUN_FILE)):
                 newer += 1
@@ -222,6 +222,15 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
             else:
                 assignment = reader.in_declared_order(assignment, scenario_file)
             reader.declare(scenario_file, assignment)
+            if "repeat.count" in suite.properties:       # a repeated variant: each attempt is a run
+                attempts = repeat_attempts(suite.properties)
+                listed.update(clean_text(job) for job, _, _ in attempts)
+                for job, attempt_verdict, attempt_reason in attempts:
+                    found = folders.get(clean_text(job))
+                    where = found.path if found is not None else None
+                    coverage = reader.coverage(where) if where is not None else None
+                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage)
+                continue
             coverage = reader.coverage(folder) if folder is not None else None
             yield reader.run(name, folder, verdict, reason, assignment, coverage)
     except JunitUnreadable as exc:
@@ -240,6 +249,27 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
         source.notes.append(f"{reader.missing_folders} job(s) of the report have no folder here (another "
                             f"host ran them): only their verdicts and parameters are counted; --store has "
                             f"their cover items")
+
+
+#: How a repeated variant's attempt outcome (``repeat.attempt.<k>``) reads as a run verdict.
+_ATTEMPT_VERDICTS = {"passed": "passed", "failed": "failed", "error": "error", "timeout": "error"}
+
+
+def repeat_attempts(properties: dict[str, str]) -> list[tuple[str, str, str | None]]:
+    """``(job name, verdict, reason)`` of each attempt of a repeated variant's testsuite, from its
+    ``repeat.attempt.<k>`` properties; an attempt that never ran is ``skipped``."""
+    try:
+        count = int(properties.get("repeat.count", "0"))
+    except ValueError:
+        return []
+    attempts = []
+    for number in range(1, count + 1):
+        job = properties.get(f"repeat.attempt.{number}.job")
+        if not job:
+            continue
+        verdict = _ATTEMPT_VERDICTS.get(properties.get(f"repeat.attempt.{number}", ""), "skipped")
+        attempts.append((job, verdict, properties.get(f"repeat.attempt.{number}.reason")))
+    return attempts
 
 
 def _unmerged(keys: list[str], folders: dict[str, JobFolder], reader: _Reader) -> Iterator[RunInput]:

@@ -24,13 +24,14 @@ from executor.batch.builtin_runner import ForkServer, ForkServerError, spare_cor
 from executor.batch.job_folders import JobFolders
 from executor.batch.job_run import Done, JobRun, Started, StartOrder, job_marker
 from executor.batch.progress import Reporter
+from executor.batch.repeats import attempt_environment, later_attempts
 from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
 from executor.process import RUNNER_ENV, disk_full, end_orphan_group, process_alive
 from store.database import StoreError
 from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
-from store.states import RETRYABLE, JobState
+from store.states import RETRYABLE, UNTIL_FAIL_REASON, JobState
 
 if TYPE_CHECKING:
     from store.coverage_records import CoverageRecords
@@ -229,7 +230,8 @@ class Worker:
             else:
                 batch = self._batch(batch_id)
                 options = batch.options
-                ahead = not batch.command and not options.halt_on_failure and not options.post_run
+                ahead = not batch.command and not options.halt_on_failure and not options.post_run \
+                    and not options.until_fail
                 self._ahead = self.settings.slots if ahead else 0
         return self._holding()
 
@@ -307,7 +309,8 @@ class Worker:
                 problem = str(exc)
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
                      echo=self.settings.echo if self.settings.slots == 1 else None,
-                     environment={RUNNER_ENV: self.identity.id}, launcher=launcher, made_folder=made_folder,
+                     environment={RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)},
+                     launcher=launcher, made_folder=made_folder,
                      order=(self._start_order, self._start_order.take()))
         self._runs[job.id] = run
         self._started += 1
@@ -471,6 +474,9 @@ class Worker:
                 self.summary.verdicts[result.status] += 1
                 if result.status is not JobState.PASSED and run.batch.options.halt_on_failure:
                     self._to_halt.add(run.batch.id)
+                if result.status is not JobState.PASSED and run.batch.options.until_fail:
+                    self.store.halt_jobs(run.batch.id, later_attempts(job.name, run.batch.options.repeat),
+                                         UNTIL_FAIL_REASON)
         except LeaseLost as exc:
             self.reporter.warn(f"result of {job.name} refused: {exc}")
             self._runs.pop(job.id, None)

@@ -154,7 +154,7 @@ def test_diff_names_exactly_the_regression_and_exits_1(tmp_path):
     lines = diff.stdout.splitlines()
     assert lines[2].startswith("1 regression(s), 0 fixed, 0 new (0 failing), 0 gone, 0 flaky, 0 still failing")
     assert lines[3] == "regressions: passed in A, fail in B (1):"
-    assert lines[4].startswith(f"  {failing[0]} (failed) - 'compare' (") and "failed: 2.0 > 5.0 is False" in lines[4]
+    assert lines[4].startswith(f"  {failing[0]} (failed) - 'compare' at ") and "failed: 2.0 > 5.0 is False" in lines[4]
 
     as_json = json.loads(run("scenario_coverage", "diff", "monday", "tuesday", "--json", cwd=tmp_path).stdout)
     assert [r["name"] for r in as_json["regressions"]] == failing and as_json["new_failures"] == 1

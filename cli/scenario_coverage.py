@@ -5,7 +5,7 @@
     scenario_coverage json   [RESULTS...] [...] [-o FILE]
 
 Thin click commands: the reading, merging and grading is :mod:`coverage_engine.coverage` (and
-:mod:`executor.coverage_source` for a store); here options are parsed, and :mod:`cli.boundary` turns
+:mod:`executor.batch.coverage_source` for a store); here options are parsed, and :mod:`cli.boundary` turns
 errors into messages and exit codes. Where the runs come from: ``RESULTS`` (results folders, a folder
 of shards' results folders, or one run's folder; several are merged) unless ``--store`` is on the command line; with ``--store``, or without ``RESULTS``, the
 store (``--store``, ``$SCENARIO_STORE`` or the default file), which is only read: a store that is not
@@ -76,7 +76,7 @@ def _report(folders: tuple[str, ...], store_url: str | None, batch_id: int | Non
         from coverage_engine.coverage.results_folder import read_results_folders
 
         return build_report(read_results_folders(list(folders)), plan)
-    from executor.coverage_source import store_source
+    from executor.batch.coverage_source import store_source
 
     results = folders[0] if folders else None
     try:

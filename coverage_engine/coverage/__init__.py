@@ -19,5 +19,5 @@ The flow, one module per step:
     each only renders that one model.
 
 Nothing here knows about the store or the runtime: the store's rows reach the merge as the same
-:class:`runs.RunInput` records (``executor.coverage_source`` builds them).
+:class:`runs.RunInput` records (``executor.batch.coverage_source`` builds them).
 """

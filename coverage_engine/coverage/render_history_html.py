@@ -24,7 +24,7 @@ def triage_section(report: CoverageReport) -> str:
     failing = runs.failing()
     if len(failing) < 2:
         return ""
-    groups = group_failures(Failure(runs.names[i], runs.reasons[i] or runs.verdicts[i], runs.values.get(i, {}))
+    groups = group_failures(Failure(runs.names[i], runs.reasons[i] or runs.verdicts[i], runs.varied(i))
                             for i in failing)
     rows = []
     for group in groups[:MAX_GROUPS]:

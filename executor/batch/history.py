@@ -21,9 +21,9 @@ from coverage_engine.coverage.grading import build_report
 from coverage_engine.coverage.model import CoverageReport
 from coverage_engine.coverage.trend import HISTORY_FILE, KEPT_BATCHES, TrendPoint, history_document
 from executor.batch.batch_outcome import BatchOutcome
+from executor.batch.coverage_source import batch_source
 from executor.batch.flaky import flaky_variants
 from executor.batch.repeats import attempt_reason, group_attempts
-from executor.coverage_source import batch_source
 from store.batch_summaries import BatchSummary, read_summaries, record_summary
 from store.coverage_records import CoverageRecords
 from store.database import StoreError
@@ -108,8 +108,8 @@ def store_extras(url: str | None, results: str | None, batch_id: int | None, *,
                  trend: bool = True) -> dict[str, object]:
     """What the reports show beyond the batch, for a stored batch: the store's batches (``history``, up to
     :data:`KEPT_BATCHES`; only with ``trend``), the batch's id (``current``) and its flaky variants."""
+    from executor.batch.coverage_source import pick_batch
     from executor.batch.flaky import variant_records
-    from executor.coverage_source import pick_batch
 
     store = QueueStore.open_existing(url)
     try:

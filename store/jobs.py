@@ -14,7 +14,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from store.states import JobState
+from store import states
+from store.states import JobState, Transition
 
 if TYPE_CHECKING:
     from sqlalchemy import RowMapping
@@ -149,6 +150,27 @@ class JobResult:
     @property
     def duration(self) -> float:
         return max(0.0, self.finished_at - self.started_at)
+
+
+@dataclass(frozen=True)
+class JobEnd:
+    """How an attempt ends in the store: its result and the transition that records it (finish, retry, cancel)."""
+
+    job: Job
+    result: JobResult
+    transition: Transition
+
+    def __post_init__(self) -> None:
+        states.check(self.transition, self.target)
+
+    @property
+    def target(self) -> JobState:
+        """The job's state once recorded: the verdict, queued again (a retry) or cancelled."""
+        if self.transition is Transition.RETRY:
+            return JobState.QUEUED
+        if self.transition is Transition.CANCEL:
+            return JobState.CANCELLED
+        return self.result.status
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from store import queue_statements as sql
 from store import states
 from store.database import StoreError, driver_error, ensure_schema, open_engine, open_existing
 from store.driver_statements import DriverStatement
-from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
+from store.jobs import Batch, BatchOptions, Job, JobEnd, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
 from store.states import JobState, Transition
@@ -194,31 +194,48 @@ class QueueStore(QueueReads):
 
     def finish(self, job: Job, result: JobResult) -> None:
         """Record the verdict of the attempt ``job`` holds; :class:`LeaseLost` if it is not ours any more."""
-        self._end(job, result, Transition.FINISH, result.status)
+        self._end_one(JobEnd(job, result, Transition.FINISH))
 
     def retry(self, job: Job, result: JobResult) -> None:
         """Record a failed attempt and queue the job again (infrastructure errors with retries left)."""
-        self._end(job, result, Transition.RETRY, JobState.QUEUED)
+        self._end_one(JobEnd(job, result, Transition.RETRY))
 
     def cancel(self, job: Job, result: JobResult) -> None:
         """Record an attempt stopped by the user; ``--resume`` runs the job again."""
-        self._end(job, result, Transition.CANCEL, JobState.CANCELLED)
+        self._end_one(JobEnd(job, result, Transition.CANCEL))
 
-    def _end(self, job: Job, result: JobResult, transition: Transition, target: JobState) -> None:
-        states.check(transition, target)
-        params = {**self._holder(job), "b_status": target.value, "b_exit": result.exit_code,
-                  "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
-                  "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
-        end = self._fast(("end", transition), sql.end_statement(transition))
+    def _end_one(self, end: JobEnd) -> None:
+        if self.record_ends([end]):
+            raise LeaseLost(f"job {end.job.name} (attempt {end.job.attempts}) is no longer held by "
+                            f"{end.job.worker_id}")
+
+    def record_ends(self, ends: Sequence[JobEnd]) -> list[JobEnd]:
+        """Record the ends of several attempts in one transaction; returns those refused (not held any more).
+
+        One commit for many results: a worker with short jobs records what ended since its last write
+        together (a transaction per job cost more than the statements in it). Each end is still its own
+        guarded UPDATE; a refused one writes nothing and does not stop the others.
+        """
+        if not ends:
+            return []
+        refused: list[JobEnd] = []
         attempt = self._fast("attempt", sql.INSERT_ATTEMPT, _ATTEMPT_KEYS)
         with self._tx() as conn:
-            if end.execute(conn, params).rowcount != 1:
-                raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
-            attempt.execute(conn, {
-                "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
-                "exit_code": result.exit_code, "started_at": result.started_at,
-                "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
-                "log_path": result.log_path, "reason": result.reason})
+            for end in ends:
+                job, result = end.job, end.result
+                update = self._fast(("end", end.transition), sql.end_statement(end.transition))
+                params = {**self._holder(job), "b_status": end.target.value, "b_exit": result.exit_code,
+                          "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
+                          "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
+                if update.execute(conn, params).rowcount != 1:
+                    refused.append(end)
+                    continue
+                attempt.execute(conn, {
+                    "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
+                    "exit_code": result.exit_code, "started_at": result.started_at,
+                    "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
+                    "log_path": result.log_path, "reason": result.reason})
+        return refused
 
     def halt(self, batch_id: int, reason: str = states.HALT_REASON) -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""

@@ -19,6 +19,7 @@ from typing import NoReturn
 import click
 
 from coverage_engine.errors import OscError
+from coverage_engine.printable import printable_lines
 
 EXIT_FAILED = 1
 EXIT_USAGE = 2
@@ -81,7 +82,11 @@ class Boundary:
             return EXIT_INTERRUPTED
         except click.ClickException as exc:
             if self.one_line_name is None:
-                exc.show()
+                import io
+
+                shown = io.StringIO()                    # (a name from the command line, escaped)
+                exc.show(file=shown)
+                click.echo(printable_lines(shown.getvalue().rstrip("\n")), err=True)
             else:
                 self._say(f"error: {exc.format_message()}")
             return exc.exit_code
@@ -113,6 +118,7 @@ class Boundary:
             traceback.print_exc()
 
     def _say(self, message: str) -> None:
+        message = printable_lines(message)       # names and source lines come from files: never raw escapes
         if self.one_line_name is not None:
             # driver errors span several lines and SQLAlchemy adds a link line: one line for logs
             lines = [line.strip() for line in message.splitlines()

@@ -7,8 +7,10 @@ nothing of ours until it collects). With ``--osc``:
 - every ``.osc`` file (one item per file, named after its scenario) and every ``.sce`` variant (named
   after the variant) under the given paths is a test item; with no other path on the command line,
   only those are collected;
-- an item runs ``scenario_execution FILE --output-dir <--osc-output>/<item>`` in a subprocess (a crash,
-  a hang or a leaked global cannot touch pytest or the next item), and passes when the scenario does;
+- an item runs ``scenario_execution FILE --output-dir <--osc-output>/<item>`` in a subprocess of its own
+  process group (a crash, a hang or a leaked global cannot touch pytest or the next item; at
+  ``--osc-timeout`` the whole group gets SIGTERM, then SIGKILL), and passes when the scenario does; each
+  item's folder is its own (a short hash of its id is added where two ids read alike);
 - a failure is reported with the scenario's own located message (``file:line:col``, the failing
   action) and the end of the run's log;
 - everything pytest offers applies: ``-k``, ``-x``, ``--lf``, ``--junitxml``, ``-n auto``
@@ -18,7 +20,6 @@ nothing of ours until it collects). With ``--osc``:
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -29,6 +30,8 @@ from coverage_engine.suffixes import OSC_SUFFIX, SCENARIO_SUFFIXES
 
 #: Lines of a failing run's log shown under its message.
 LOG_TAIL_LINES = 30
+#: Seconds a timed-out scenario's process group has between SIGTERM and SIGKILL.
+GRACE = 5.0
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -103,23 +106,35 @@ class ScenarioFailed(Exception):
 class ScenarioItem(pytest.Item):
     """One scenario run through ``scenario_execution`` in a subprocess."""
 
+    #: The item's folder under ``--osc-output`` (set at collection: unique among the collected items).
+    folder = ""
+
     def runtest(self) -> None:
+        """Run the scenario in its own process group (the log written straight into ``log.txt``); at the
+        timeout the whole group gets SIGTERM, then SIGKILL after the grace, as a batch job's does."""
+        from executor.children.process import ChildProcess
+
         config = self.config
-        output = Path(config.getoption("osc_output")).resolve() / _folder_name(self.nodeid)
+        output = Path(config.getoption("osc_output")).resolve() / (self.folder or _readable(self.nodeid))
         output.mkdir(parents=True, exist_ok=True)
         command = [sys.executable, "-m", "cli.scenario_execution", str(self.path), "--output-dir", str(output)]
-        env = dict(os.environ, NO_COLOR="1", PYTHONUNBUFFERED="1")
         root = str(Path(__file__).resolve().parent.parent)
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        env = {"NO_COLOR": "1", "PYTHONUNBUFFERED": "1",
+               "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+        timeout = config.getoption("osc_timeout")
+        child = ChildProcess(command, str(output / LOG_FILE), cwd=str(self.path.parent), timeout=timeout,
+                             grace=GRACE, environment=env)
+        child.start()
         try:
-            done = subprocess.run(command, cwd=self.path.parent, env=env, stdout=subprocess.PIPE,
-                                  stderr=subprocess.STDOUT, timeout=config.getoption("osc_timeout"))
-        except subprocess.TimeoutExpired as exc:
-            log = (exc.stdout or b"").decode("utf-8", "replace")
-            raise ScenarioFailed(f"timed out after {config.getoption('osc_timeout'):g} s", _tail(log)) from None
-        log = done.stdout.decode("utf-8", "replace")
-        (output / LOG_FILE).write_text(log, encoding="utf-8")
-        if done.returncode != 0:
+            outcome = child.wait()
+        except BaseException:               # Ctrl-C of pytest: the scenario's whole group ends too
+            child.cancel(0)
+            child.wait()
+            raise
+        log = (output / LOG_FILE).read_bytes().decode("utf-8", "replace")
+        if outcome.timed_out:
+            raise ScenarioFailed(f"timed out after {timeout:g} s", _tail(log))
+        if outcome.returncode != 0:
             raise ScenarioFailed(_failure_message(output / RESULT_FILE, log), _tail(log))
 
     def repr_failure(self, excinfo, style=None):
@@ -132,8 +147,27 @@ class ScenarioItem(pytest.Item):
         return self.path, None, f"scenario {self.name}"
 
 
-def _folder_name(nodeid: str) -> str:
+def _readable(nodeid: str) -> str:
+    """The item's id with every character but letters, digits, ``-``, ``_`` and ``.`` written ``_``."""
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in nodeid)[-150:]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Give each scenario item its folder: the readable id, with a short hash of the full id appended
+    where two items' readable ids are the same (``x y.osc`` and ``x_y.osc``). Every pytest-xdist worker
+    collects the same items before any is deselected, so each names an item's folder alike."""
+    import hashlib
+    from collections import Counter
+
+    scenario_items = [item for item in items if isinstance(item, ScenarioItem)]
+    counts = Counter(_readable(item.nodeid) for item in scenario_items)
+    for item in scenario_items:
+        readable = _readable(item.nodeid)
+        if counts[readable] > 1:
+            readable = readable[-140:] + "-" + hashlib.sha256(item.nodeid.encode("utf-8", "surrogateescape")
+                                                              ).hexdigest()[:8]
+        item.folder = readable
 
 
 def _failure_message(report: Path, log: str) -> str:

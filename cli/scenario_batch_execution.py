@@ -23,10 +23,23 @@ from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from coverage_engine.results.files import RESULT_FILE
 from executor.batch.errors import BatchError, BatchUsageError
+from executor.output.terminal import printable
 from store.database import StoreError, StoreMissing
 
 PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
+
+
+def _count(kind: click.ParamType, text: str, given: object, other: str, param, ctx) -> int:
+    """``text`` as a whole number of at least 1; else the option's usage error (``other``: the other form
+    the option takes)."""
+    try:
+        number = int(text)
+    except ValueError:
+        kind.fail(f"{given!r} is neither a number nor {other}", param, ctx)
+    if number < 1:
+        kind.fail(f"{number} must be at least 1", param, ctx)
+    return number
 
 
 class JobsType(click.ParamType):
@@ -41,13 +54,7 @@ class JobsType(click.ParamType):
             from executor.batch.builtin_runner import usable_cpus
 
             return usable_cpus()
-        try:
-            number = int(value)
-        except ValueError:
-            self.fail(f"{value!r} is neither a number nor 'auto'", param, ctx)
-        if number < 1:
-            self.fail(f"{number} must be at least 1", param, ctx)
-        return number
+        return _count(self, str(value), value, "'auto'", param, ctx)
 
 
 class ShardType(click.ParamType):
@@ -65,6 +72,21 @@ class ShardType(click.ParamType):
             return Shard.parse(value)
         except BadShard as exc:
             self.fail(str(exc).removeprefix("--shard "), param, ctx)
+
+
+class RepeatType(click.ParamType):
+    """``--repeat``: ``N`` attempts of each variant, or ``until-fail:N`` (stop a variant at its first failure);
+    converts to ``(N, until_fail)``."""
+
+    name = "N|until-fail:N"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        text = str(value).strip()
+        until_fail = text.lower().startswith("until-fail:")
+        number = text.split(":", 1)[1] if until_fail else text
+        return _count(self, number, value, "'until-fail:N'", param, ctx), until_fail
 
 
 def _check_command(command) -> None:
@@ -146,12 +168,18 @@ def _check_post_run(hooks) -> None:
 @click.option("--only-new", is_flag=True,
               help="Run only the files of -i that no earlier batch of -o ran (same path and content), e.g. after "
                    "'scenario_variation --only-new'; the report keeps the earlier verdicts too.")
+@click.option("--repeat", type=RepeatType(), default="1", show_default=True,
+              help="Run each variant N times, each attempt its own job and folder (<name>@<k>, $SCENARIO_ATTEMPT=k); "
+                   "'until-fail:N' stops a variant's attempts at its first failure. The variant's verdict is its "
+                   "pass rate against --pass-rate; the JUnit report keeps one testcase per variant.")
+@click.option("--pass-rate", type=click.FloatRange(0, 1), default=1.0, show_default=True, metavar="R",
+              help="With --repeat: the share of a variant's attempts that must pass for it to pass (0.9: 9 in 10).")
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, only_new, store_url,
-                debug, command):
+                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, only_new, repeat,
+                pass_rate, store_url, debug, command):
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -183,7 +211,8 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
         input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
         options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
                              ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
-                             simulation=simulation),
+                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
+                             pass_rate=pass_rate),
         shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
     store = _open_store(store_url)
     lock = None
@@ -222,9 +251,14 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
         counts, signum = ran.counts, ran.signum
         report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
         _print_failures(store, batch)
+        if ran.outcome is not None:
+            from executor.batch.batch_outcome import flaky_lines
+
+            for text in flaky_lines(ran.outcome):
+                click.echo(text)
         if ran.report_error is not None:
             report = None
-        line = orchestration.summary_line(batch, counts, report)
+        line = orchestration.summary_line(batch, counts, report, ran.outcome)
         if signum is not None:
             line += "; interrupted, finish with --resume"
         click.echo(line)
@@ -295,8 +329,9 @@ def _pick_batch(store, batch_id):
 @click.command(context_settings=CONTEXT)
 @store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to show (default: the latest).")
-@click.option("--list", "list_state", type=click.Choice(["failed"]),
-              help="List the jobs that did not pass (failed, error, timeout): name, reason and log.")
+@click.option("--list", "list_state", type=click.Choice(["failed", "flaky"]),
+              help="List the jobs that did not pass (failed, error, timeout: name, reason and log), or the flaky "
+                   "variants (passed and failed, in this batch's attempts or the store's earlier batches).")
 @click.option("--json", "as_json", is_flag=True, help="Print the status (and the --list) as JSON, for scripts.")
 @debug_option
 def status_command(store_url, batch_id, list_state, as_json, debug):
@@ -308,7 +343,8 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
     try:
         batch = _pick_batch(store, batch_id)
         snap = snapshot(store, batch)
-        failed = not_passed_in_store(store, batch.id) if list_state is not None else None
+        failed = not_passed_in_store(store, batch.id) if list_state == "failed" else None
+        flaky = _flaky_records(store, batch) if list_state == "flaky" else None
         if as_json:
             import json
 
@@ -319,11 +355,18 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
                 "eta_seconds": snap.eta_seconds}
             if failed is not None:
                 document["not_passed"] = [item.as_dict() for item in failed]
+            if flaky is not None:
+                document["flaky"] = [{"name": r.variant, "passed": r.passed, "not_passed": r.not_passed}
+                                     for r in flaky]
             click.echo(json.dumps(document, indent=2))
             return 0
         render(snap, sys.stdout)
         for item in failed or ():
             click.echo(item.line())
+        if flaky is not None:
+            click.echo(f"{len(flaky)} flaky variant(s)")
+        for record in flaky or ():
+            click.echo(f"FLAKY    {printable(record.variant)} - {record.text()}")
     finally:
         store.close()
     return 0
@@ -333,7 +376,7 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
 @store_option
 @click.option("--batch", "batch_id", type=int, help="Batch to report (default: the latest).")
 @click.option("-o", "--output", default=RESULT_FILE, show_default=True, type=click.Path(dir_okay=False),
-              help="File for the merged JUnit report.")
+              help="File for the merged JUnit report ('-': standard output).")
 @click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option
 def report_command(store_url, batch_id, output, as_json, debug):
@@ -354,12 +397,12 @@ def report_command(store_url, batch_id, output, as_json, debug):
     if failed is not None:
         import json
 
-        click.echo(json.dumps({"batch": batch.id, "report": os.path.abspath(output),
+        click.echo(json.dumps({"batch": batch.id, "report": output if output == "-" else os.path.abspath(output),
                                "counts": {state.value: count for state, count in counts.items()},
                                "exit_code": orchestration.exit_code(counts),
                                "not_passed": [item.as_dict() for item in failed]}, indent=2))
-    else:
-        click.echo(orchestration.summary_line(batch, counts, output))
+    else:   # with -o - the report is standard output, and the summary goes to standard error
+        click.echo(orchestration.summary_line(batch, counts, output), err=output == "-")
     return orchestration.exit_code(counts)
 
 
@@ -378,11 +421,21 @@ def _lock_output(folder: str, wait: bool):
         raise BatchError(f"cannot use the output folder {folder}: {exc.strerror or exc}") from None
 
 
-def _print_failures(store, batch) -> None:
-    """The short summary of the jobs that did not pass (nothing when all passed)."""
-    from executor.batch.failure_summary import not_passed_in_folder, summary_lines
+def _flaky_records(store, batch):
+    """The flaky variants of ``batch`` with their passes and failures over the store's batches up to it."""
+    from executor.batch.flaky import variant_records
 
-    for text in summary_lines(not_passed_in_folder(store, batch)):
+    records = variant_records(store, store.jobs(batch.id), batch.id)
+    return [record for record in records.values() if record.flaky]
+
+
+def _print_failures(store, batch) -> None:
+    """The failures grouped by kind (the triage), then the short summary of the jobs of the folder whose
+    latest verdict is not a pass (nothing when all passed)."""
+    from executor.batch.failure_summary import not_passed_in_folder, summary_lines, triage
+
+    items = not_passed_in_folder(store, batch)
+    for text in triage(store, items) + summary_lines(items):
         click.echo(text)
 
 

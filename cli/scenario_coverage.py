@@ -26,7 +26,9 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from cli.boundary import Boundary
+from cli.coverage_history import diff_command, history_command, with_history
 from cli.options import debug_option, store_option
+from coverage_engine.printable import printable
 from store.database import StoreError, StoreMissing
 
 if TYPE_CHECKING:
@@ -87,6 +89,12 @@ def _report(folders: tuple[str, ...], store_url: str | None, batch_id: int | Non
     return build_report(source, plan)
 
 
+def _history_store(results: tuple[str, ...], store_url: str | None) -> str | None:
+    """The store the report's history and flaky variants come from: the one read (``--store``, or no
+    RESULTS), else None (the results folder's own files)."""
+    return store_url if _store_named() or not results else None
+
+
 def _gate(report: CoverageReport, fail_under: float | None) -> int:
     """``--fail-under``: one comparison on the grade as the report shows it (one decimal), as coverage.py
     compares at its display precision: a report saying 90.0 % never fails ``--fail-under 90``."""
@@ -107,7 +115,7 @@ def _output_path(output: str) -> str:
 
 @click.command(context_settings=CONTEXT)
 @_common
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the (plain) report to FILE ('-': standard output).")
 def report_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                    fail_under: float | None, debug: bool, output: str | None) -> int:
     """Print the coverage of RESULTS (one or more results folders, merged): items, buckets, grades, holes and
@@ -118,20 +126,22 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
     from executor.output.terminal import wants_rich
 
     report = _report(results, store_url, batch_id, plan_file)
+    report = with_history(report, results, _history_store(results, store_url), batch_id, trend=False)
     rich = not output and wants_rich(sys.stdout)   # the one terminal policy; rich itself honours NO_COLOR
     if rich:
-        render_text(report, Console(force_terminal=True, highlight=False), plain=False)
+        render_text(report, Console(force_terminal=True, highlight=False, markup=False), plain=False)
         return _gate(report, fail_under)
     import io
 
     buffer = io.StringIO()
-    render_text(report, Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False),
-                plain=True)
+    console = Console(file=buffer, width=plain_width(report), color_system=None, force_terminal=False,
+                      markup=False)
+    render_text(report, console, plain=True)
     text = "".join(line.rstrip() + "\n" for line in buffer.getvalue().splitlines())   # no padding in files and logs
     if output:
-        from coverage_engine.results.atomic import write_text_atomically
+        from coverage_engine.results.atomic import write_output
 
-        write_text_atomically(_output_path(output), text)
+        write_output(_output_path(output), text)
     else:
         sys.stdout.write(text)
     return _gate(report, fail_under)
@@ -140,20 +150,23 @@ def report_command(results: tuple[str, ...], store_url: str | None, batch_id: in
 @click.command(context_settings=CONTEXT)
 @_common
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="coverage.html", show_default=True,
-              help="The HTML file to write (one self-contained file).")
+              help="The HTML file to write (one self-contained file; '-': standard output).")
 def html_command(results: tuple[str, ...], store_url: str | None, batch_id: int | None, plan_file: str | None,
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as one self-contained HTML page (no network needed to view it)."""
     from coverage_engine.coverage.render_html import render_html
-    from coverage_engine.results.atomic import write_text_atomically
+    from coverage_engine.results.atomic import STDOUT, write_output
 
     path = _output_path(output)
     report = _report(results, store_url, batch_id, plan_file)
-    folder = os.path.dirname(os.path.abspath(path))
+    report = with_history(report, results, _history_store(results, store_url), batch_id)
+    folder = os.getcwd() if path == STDOUT else os.path.dirname(os.path.abspath(path))
     text = render_html(report, output_dir=folder, generated=time.strftime("%Y-%m-%d %H:%M"))
-    write_text_atomically(path, text)
+    write_output(path, text)
+    if path == STDOUT:
+        return _gate(report, fail_under)
     grade = "no graded item" if report.grade is None else f"grade {report.grade:.1f} %"
-    click.echo(f"wrote {path} ({grade}, {len(report.runs)} run(s))")
+    click.echo(printable(f"wrote {path} ({grade}, {len(report.runs)} run(s))"))
     return _gate(report, fail_under)
 
 
@@ -165,20 +178,18 @@ def json_command(results: tuple[str, ...], store_url: str | None, batch_id: int 
                  fail_under: float | None, debug: bool, output: str) -> int:
     """Write the coverage of RESULTS as JSON (format scenario-coverage/report, see docs/coverage.md)."""
     from coverage_engine.coverage.render_json import render_json
-    from coverage_engine.results.atomic import write_text_atomically
+    from coverage_engine.results.atomic import write_output
 
     report = _report(results, store_url, batch_id, plan_file)
-    text = render_json(report)
-    if output == "-":
-        sys.stdout.write(text)
-    else:
-        write_text_atomically(_output_path(output), text)
+    text = render_json(with_history(report, results, _history_store(results, store_url), batch_id, trend=False))
+    write_output(_output_path(output), text)
     return _gate(report, fail_under)
 
 
 @click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.group(context_settings=CONTEXT,
-             commands={"report": report_command, "html": html_command, "json": json_command})
+             commands={"report": report_command, "html": html_command, "json": json_command,
+                       "history": history_command, "diff": diff_command})
 def group() -> None:
     """Report the coverage of a batch's results folder (or of one run's folder, or of a batch in the store)."""
 

@@ -23,8 +23,8 @@ Subpackages in the order data flows; each imports only the ones below it (checke
     ``evaluate`` computes at run time and ``printer`` shows.
 ``files/``
     ``loader`` (a scenario file in, a model out: the one call the executor needs), ``sce`` (the variant
-    format: ``sce_writer`` writes it, ``sce_plain`` reads it without YAML, ``sce_domains`` the ``# domain``
-    lines of its header that say what was varied), ``parameters`` (parameter files and their template).
+    format: ``sce_writer`` writes it, ``sce_plain`` reads it without YAML), ``parameters`` (parameter
+    files and their template).
 ``variation/``
     the variation generator, in passes (see its ``__init__``): dimensions, template, plan, conditions,
     strategies (full, t-way with ``pairwise``, samples ``drawn`` lazily), output.
@@ -34,11 +34,13 @@ Subpackages in the order data flows; each imports only the ones below it (checke
     pytest plugin).
 ``coverage/``
     each run's ``coverage.json`` and verdict merged into one graded coverage model, and its three renderers;
-    it reads results, never the language pipeline (only the ``.sce`` domain lines).
+    it reads results and ``domains``, never the language pipeline (its map is in its ``__init__``).
 
 Below them: ``errors`` (the one exception tree; every error carries a ``location``), ``location``,
+``domains`` (what a variation declared per varied parameter: the ``# domain`` lines of a ``.sce``
+header and a batch's ``declared.json``, which the ``.sce`` writer writes and the coverage model reads),
 ``records`` (the ``@record`` decorator of syntax nodes and model records) and ``suffixes`` (``.osc``,
-``.sce``). Beside them: ``yaml_bounds`` (the one bounded YAML loader) and ``lazy`` (values computed when
-asked for). ``osc/`` holds the standard ``.osc`` libraries (``osc.types``, ``osc.helpers``,
-``osc.standard``, ``osc.robotics``).
+``.sce``). Beside them: ``yaml_bounds`` (the one bounded YAML loader), ``limits`` (input bounds),
+``printable`` (text made safe to show) and ``lazy`` (values computed when asked for). ``osc/`` holds the
+standard ``.osc`` libraries (``osc.types``, ``osc.helpers``, ``osc.standard``, ``osc.robotics``).
 """

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from coverage_engine.location import Location
+from coverage_engine.printable import clipped, printable
 
 
 class OscError(Exception):
@@ -37,13 +38,17 @@ class OscError(Exception):
         return f"error: {self.message}"
 
     def render(self) -> str:
-        """The full message: ``file:line:col: error: msg``, then the source line and a caret when known."""
+        """The full message: ``file:line:col: error: msg``, then the source line (a window of at most
+        :data:`~coverage_engine.printable.MAX_SHOWN` characters, escaped) and a caret when known."""
         lines = [str(self)]
         source_line, loc = self.source_line, self.location
         if source_line is not None and loc is not None:
-            shown = source_line.rstrip("\r\n").expandtabs(1)
-            lines.append("    " + shown)
-            lines.append("    " + " " * max(loc.column - 1, 0) + "^")
+            # a window of the line around the column, its control characters escaped (the caret follows)
+            line, column = source_line.rstrip("\r\n").expandtabs(1), loc.column
+            shown, column = clipped(line, column)
+            before = printable(shown[:max(column - 1, 0)])
+            lines.append("    " + before + printable(shown[max(column - 1, 0):]))
+            lines.append("    " + " " * len(before) + "^")
         if self.hint:
             lines.append(f"hint: {self.hint}")
         return "\n".join(lines)

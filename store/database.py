@@ -9,9 +9,11 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
+from typing import Any
 
 from sqlalchemy import (
     Column,
+    Connection,
     Engine,
     Integer,
     MetaData,
@@ -56,6 +58,22 @@ class StoreMissing(StoreError):
     """There is no store at the given place (a command that only reads never creates one)."""
 
 
+#: SQLite's words for a write the disk or a file size limit refused.
+_NO_ROOM = ("disk I/O error", "database or disk is full")
+
+
+def driver_error(exc: BaseException, shown: str) -> str:
+    """The message of a database error for people: a write SQLite could not make (a full disk, a
+    ``ulimit -f``) names the files it was writing, where SQLite says only "disk I/O error"."""
+    orig = getattr(exc, "orig", None) or exc
+    text = str(orig).splitlines()[0] if str(orig) else type(orig).__name__
+    path = sqlite_file(shown) if shown.startswith("sqlite") else None
+    if path is not None and any(words in text for words in _NO_ROOM):
+        return (f"cannot write the store {path} (or its journal {path}-wal): the disk is full or a file size "
+                f"limit (ulimit -f) was reached (SQLite: {text})")
+    return f"store {shown}: {text}"
+
+
 def store_url(option: str | None = None) -> str:
     """The URL to use: the ``--store`` option, else ``$SCENARIO_STORE``, else the default SQLite file."""
     if option:
@@ -90,11 +108,13 @@ def _sqlite_pragmas(dbapi_connection, _record) -> None:  # pragma: no cover - tr
     cursor.close()
 
 
-def _sqlite_begin(conn) -> None:  # pragma: no cover - trivial
+def _sqlite_begin(dbapi_connection: Any) -> None:  # pragma: no cover - trivial
     # Take the write lock at the start of every transaction: a transaction that reads and then writes
     # would otherwise fail at once with "database is locked" when another process wrote in between
-    # (WAL snapshot conflict), and the busy timeout does not help there.
-    conn.exec_driver_sql("BEGIN IMMEDIATE")
+    # (WAL snapshot conflict), and the busy timeout does not help there. Sent on the driver's
+    # connection as the dialect's own BEGIN (an error becomes SQLAlchemy's, as any BEGIN's would):
+    # through a "begin" event and ``exec_driver_sql`` it cost a fifth of a short job's store time.
+    dbapi_connection.execute("BEGIN IMMEDIATE")
 
 
 def open_engine(url: str | None = None) -> Engine:
@@ -104,7 +124,7 @@ def open_engine(url: str | None = None) -> Engine:
         if url.startswith("sqlite"):
             engine = create_engine(url, connect_args={"timeout": 30})
             event.listen(engine, "connect", _sqlite_pragmas)
-            event.listen(engine, "begin", _sqlite_begin)
+            engine.dialect.do_begin = _sqlite_begin  # type: ignore[method-assign]
         else:
             engine = create_engine(url, pool_pre_ping=True)
     except (SQLAlchemyError, ImportError, ValueError) as exc:
@@ -172,9 +192,10 @@ def open_existing(url: str | None = None) -> Engine:
             if not inspect(conn).has_table(store_meta.name):
                 raise StoreMissing(f"{shown} is not a scenario store (it has no {store_meta.name} table)")
             row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
+            check_tables(conn, shown)
     except SQLAlchemyError as exc:
         engine.dispose()
-        raise StoreError(f"cannot use store {shown}: {exc}") from exc
+        raise StoreError(f"cannot use the store: {driver_error(exc, shown)}") from exc
     except StoreError:
         engine.dispose()
         raise
@@ -187,6 +208,35 @@ def open_existing(url: str | None = None) -> Engine:
     return engine
 
 
+#: What the ``value`` of the store's ``schema`` row says: this tool made the database.
+STORE_MARK = "scenario-coverage"
+
+
+def check_tables(conn: Connection, shown: str) -> None:
+    """Refuse a database that is not a scenario store, or one whose tables lack columns, when it is opened
+    (not after the first job ran): other tables and no ``store_meta`` (a foreign database, which
+    ``create_all`` would otherwise fill with ours), a ``store_meta`` another tool wrote, or a table of ours
+    missing a column this release writes."""
+    inspector = inspect(conn)
+    names = set(inspector.get_table_names())
+    if store_meta.name not in names:
+        foreign = sorted(names - set(metadata.tables))
+        if foreign:
+            raise StoreError(f"{shown} is not a scenario store: it holds other tables ({', '.join(foreign[:5])}) "
+                             f"and no {store_meta.name}; give a new file or an empty database")
+        return
+    row = conn.execute(select(store_meta.c.value).where(store_meta.c.key == "schema")).first()
+    if row is None or row[0] != STORE_MARK:
+        raise StoreError(f"{shown} is not a scenario store: its {store_meta.name} table was written by "
+                         f"something else; give a new file or an empty database")
+    for name in sorted(names & set(metadata.tables)):
+        present = {column["name"] for column in inspector.get_columns(name)}
+        missing = [column.name for column in metadata.tables[name].columns if column.name not in present]
+        if missing:
+            raise StoreError(f"the store at {shown} is damaged: its table {name} lacks the column(s) "
+                             f"{', '.join(missing)}; nothing was run (use a new store, --store)")
+
+
 def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
     """Create missing tables (all, or just ``tables``) and refuse a store made by an incompatible version.
 
@@ -197,10 +247,11 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
         with engine.begin() as conn:
             if conn.dialect.name == "postgresql":
                 conn.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": _SCHEMA_LOCK_KEY})
+            check_tables(conn, engine.url.render_as_string(hide_password=True))
             store_meta.create(conn, checkfirst=True)
             row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
             if row is None:
-                conn.execute(store_meta.insert().values(key="schema", value="scenario-coverage",
+                conn.execute(store_meta.insert().values(key="schema", value=STORE_MARK,
                                                         schema_version=SCHEMA_VERSION))
             elif row[0] in UPGRADABLE_FROM:
                 conn.execute(store_meta.update().where(store_meta.c.key == "schema")
@@ -213,4 +264,5 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
     except StoreError:
         raise
     except SQLAlchemyError as exc:
-        raise StoreError(f"cannot use store {engine.url.render_as_string(hide_password=True)}: {exc}") from exc
+        raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"
+                         ) from exc

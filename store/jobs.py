@@ -14,7 +14,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from store.states import JobState
+from store import states
+from store.states import JobState, Transition
 
 if TYPE_CHECKING:
     from sqlalchemy import RowMapping
@@ -42,6 +43,12 @@ class BatchOptions:
     #: The batch this one adds to (``--rerun-failed``, ``--only-new``): the folder's report keeps that
     #: batch's verdicts (and those it continues) for the jobs this one does not run; None: a fresh start.
     continues: int | None = None
+    #: ``--repeat``: attempts of each variant (each its own job, named ``<variant>@<k>``); with ``until_fail``
+    #: the attempts not started yet are cancelled at the variant's first failure.
+    repeat: int = 1
+    until_fail: bool = False
+    #: ``--pass-rate``: the share of a variant's attempts that must pass for the variant to pass.
+    pass_rate: float = 1.0
 
     def to_json(self) -> str:
         data = asdict(self)
@@ -143,6 +150,27 @@ class JobResult:
     @property
     def duration(self) -> float:
         return max(0.0, self.finished_at - self.started_at)
+
+
+@dataclass(frozen=True)
+class JobEnd:
+    """How an attempt ends in the store: its result and the transition that records it (finish, retry, cancel)."""
+
+    job: Job
+    result: JobResult
+    transition: Transition
+
+    def __post_init__(self) -> None:
+        states.check(self.transition, self.target)
+
+    @property
+    def target(self) -> JobState:
+        """The job's state once recorded: the verdict, queued again (a retry) or cancelled."""
+        if self.transition is Transition.RETRY:
+            return JobState.QUEUED
+        if self.transition is Transition.CANCEL:
+            return JobState.CANCELLED
+        return self.result.status
 
 
 @dataclass(frozen=True)

@@ -23,9 +23,9 @@ from sqlalchemy.sql import ClauseElement
 
 from store import queue_statements as sql
 from store import states
-from store.database import StoreError, ensure_schema, open_engine, open_existing
+from store.database import StoreError, driver_error, ensure_schema, open_engine, open_existing
 from store.driver_statements import DriverStatement
-from store.jobs import Batch, BatchOptions, Job, JobResult, JobSpec, Reclaimed, WorkerIdentity
+from store.jobs import Batch, BatchOptions, Job, JobEnd, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
 from store.states import JobState, Transition
@@ -82,7 +82,8 @@ class QueueStore(QueueReads):
             has_batches = inspect(engine).has_table(batches.name)
         except SQLAlchemyError as exc:
             engine.dispose()
-            raise StoreError(f"cannot use store {engine.url.render_as_string(hide_password=True)}: {exc}") from exc
+            raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"
+                             ) from exc
         if not has_batches:
             engine.dispose()
             raise StoreError(f"the store {engine.url.render_as_string(hide_password=True)} holds no batch")
@@ -117,7 +118,7 @@ class QueueStore(QueueReads):
             self._drop()
             if exc.connection_invalidated or isinstance(exc.orig, (OSError,)) or _is_transient(exc):
                 raise StoreUnavailable(f"store {self.url} unavailable: {exc.orig}") from exc
-            raise StoreError(f"store {self.url}: {exc.orig}") from exc
+            raise StoreError(driver_error(exc, self.url)) from exc
 
     # ----------------------------------------------------------------- transitions
     @staticmethod
@@ -193,31 +194,48 @@ class QueueStore(QueueReads):
 
     def finish(self, job: Job, result: JobResult) -> None:
         """Record the verdict of the attempt ``job`` holds; :class:`LeaseLost` if it is not ours any more."""
-        self._end(job, result, Transition.FINISH, result.status)
+        self._end_one(JobEnd(job, result, Transition.FINISH))
 
     def retry(self, job: Job, result: JobResult) -> None:
         """Record a failed attempt and queue the job again (infrastructure errors with retries left)."""
-        self._end(job, result, Transition.RETRY, JobState.QUEUED)
+        self._end_one(JobEnd(job, result, Transition.RETRY))
 
     def cancel(self, job: Job, result: JobResult) -> None:
         """Record an attempt stopped by the user; ``--resume`` runs the job again."""
-        self._end(job, result, Transition.CANCEL, JobState.CANCELLED)
+        self._end_one(JobEnd(job, result, Transition.CANCEL))
 
-    def _end(self, job: Job, result: JobResult, transition: Transition, target: JobState) -> None:
-        states.check(transition, target)
-        params = {**self._holder(job), "b_status": target.value, "b_exit": result.exit_code,
-                  "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
-                  "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
-        end = self._fast(("end", transition), sql.end_statement(transition))
+    def _end_one(self, end: JobEnd) -> None:
+        if self.record_ends([end]):
+            raise LeaseLost(f"job {end.job.name} (attempt {end.job.attempts}) is no longer held by "
+                            f"{end.job.worker_id}")
+
+    def record_ends(self, ends: Sequence[JobEnd]) -> list[JobEnd]:
+        """Record the ends of several attempts in one transaction; returns those refused (not held any more).
+
+        One commit for many results: a worker with short jobs records what ended since its last write
+        together (a transaction per job cost more than the statements in it). Each end is still its own
+        guarded UPDATE; a refused one writes nothing and does not stop the others.
+        """
+        if not ends:
+            return []
+        refused: list[JobEnd] = []
         attempt = self._fast("attempt", sql.INSERT_ATTEMPT, _ATTEMPT_KEYS)
         with self._tx() as conn:
-            if end.execute(conn, params).rowcount != 1:
-                raise LeaseLost(f"job {job.name} (attempt {job.attempts}) is no longer held by {job.worker_id}")
-            attempt.execute(conn, {
-                "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
-                "exit_code": result.exit_code, "started_at": result.started_at,
-                "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
-                "log_path": result.log_path, "reason": result.reason})
+            for end in ends:
+                job, result = end.job, end.result
+                update = self._fast(("end", end.transition), sql.end_statement(end.transition))
+                params = {**self._holder(job), "b_status": end.target.value, "b_exit": result.exit_code,
+                          "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
+                          "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
+                if update.execute(conn, params).rowcount != 1:
+                    refused.append(end)
+                    continue
+                attempt.execute(conn, {
+                    "job_id": job.id, "attempt": job.attempts, "outcome": result.status.value,
+                    "exit_code": result.exit_code, "started_at": result.started_at,
+                    "finished_at": result.finished_at, "worker_id": job.worker_id, "host": job.worker_host,
+                    "log_path": result.log_path, "reason": result.reason})
+        return refused
 
     def halt(self, batch_id: int, reason: str = states.HALT_REASON) -> int:
         """Cancel the batch's jobs that have not started (``--halt-on-failure``); returns how many."""
@@ -225,10 +243,19 @@ class QueueStore(QueueReads):
             return len(self._move(conn, Transition.HALT, JobState.CANCELLED, [jobs.c.batch_id == batch_id],
                                   dict(reason=reason)))
 
+    def halt_jobs(self, batch_id: int, names: Sequence[str], reason: str) -> int:
+        """Cancel the named jobs of the batch that have not started (``--repeat until-fail`` after a
+        failed attempt: that variant's later attempts); returns how many."""
+        with self._tx() as conn:
+            return len(self._move(conn, Transition.HALT, JobState.CANCELLED,
+                                  [jobs.c.batch_id == batch_id, jobs.c.name.in_(list(names))], dict(reason=reason)))
+
     def resume(self, batch_id: int) -> int:
         """Queue the batch's cancelled jobs again; returns how many."""
         with self._tx() as conn:
-            return len(self._move(conn, Transition.RESUME, JobState.QUEUED, [jobs.c.batch_id == batch_id],
+            return len(self._move(conn, Transition.RESUME, JobState.QUEUED,
+                                  [jobs.c.batch_id == batch_id,
+                                   func.coalesce(jobs.c.reason, "") != states.UNTIL_FAIL_REASON],
                                   dict(reason=None)))
 
     def release(self, worker: WorkerIdentity, job_ids: Iterable[int]) -> int:

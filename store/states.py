@@ -59,6 +59,10 @@ TRANSITIONS: dict[Transition, tuple[frozenset[JobState], frozenset[JobState]]] =
 #: The reason recorded on jobs a halt cancelled before they started (the merged report shows them as skipped).
 HALT_REASON = "not started: --halt-on-failure after a failed job"
 
+#: The reason recorded on the attempts ``--repeat until-fail`` kept from starting after their variant failed
+#: (the merged report lists them as not run; ``--resume`` leaves them so).
+UNTIL_FAIL_REASON = "not run: an earlier attempt of the variant failed (--repeat until-fail)"
+
 #: The reason recorded on a claimed job whose command a cancel (Ctrl-C, SIGTERM) kept from starting.
 NOT_STARTED_REASON = "cancelled before it started"
 

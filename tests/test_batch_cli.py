@@ -308,12 +308,16 @@ def test_variant_assignment_becomes_properties(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"v0": "", "plain": ""})
     store = tmp_path / "store.db"
-    conn = sqlite3.connect(store)
-    conn.execute("CREATE TABLE variants (id INTEGER PRIMARY KEY, file_path TEXT, assignment TEXT)")
-    conn.execute("INSERT INTO variants (file_path, assignment) VALUES (?, ?)",
-                 (str((tmp_path / "in" / "v0.sce").resolve()), '{"scenario.speed": 5.0, "scenario.name": "a"}'))
-    conn.commit()
-    conn.close()
+    from store.database import open_engine
+    from store.variants import VariantRecord, content_hash, record_variation
+
+    engine = open_engine(f"sqlite:///{store}")               # a store as scenario_variation leaves it
+    record_variation(engine, source_path="/src/v.osc", source_sha256=content_hash("scenario v:\n"),
+                     source_text="scenario v:\n", options={}, output_dir=str(tmp_path / "in"),
+                     records=[VariantRecord(index=0, scenario="scenario", sce_text="# v0\n",
+                                            assignment={"scenario.speed": 5.0, "scenario.name": "a"},
+                                            file_path=str((tmp_path / "in" / "v0.sce").resolve()))])
+    engine.dispose()
     result = run_cli(["-i", "in", "-o", "results", "--store", f"sqlite:///{store}", "--",
                       *child_command(child)], tmp_path)
     assert result.returncode == 0, result.stderr

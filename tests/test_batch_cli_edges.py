@@ -9,24 +9,65 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
 
-from executor.batch.inputs import substitute
+from executor.batch.errors import BadCommand
+from executor.batch.inputs import check_command
+from executor.batch.launch_template import substitute
 
 
 def test_a_value_is_never_searched_for_placeholders_again():
-    argv = substitute(["run", "{SCENARIO}", "{OUTPUT_DIR}"], "in{OUTPUT_DIR}/a.osc", "res/a")
-    assert argv == ["run", "in{OUTPUT_DIR}/a.osc", "res/a"]
-    assert substitute(["x", "--out={OUTPUT_DIR}"], "{OUTPUT_DIR}.osc", "o") == ["x", "--out=o"]
+    argv = substitute(["run", "{SCENARIO}", "{OUTPUT_DIR}"], "in{OUTPUT_DIR}/a.osc", "res/a").argv
+    assert argv == ("run", "in{OUTPUT_DIR}/a.osc", "res/a")
+    assert substitute(["x", "--out={OUTPUT_DIR}"], "{OUTPUT_DIR}.osc", "o").argv == ("x", "--out=o")
 
 
-def test_values_in_a_shell_script_are_quoted_and_elsewhere_passed_as_they_are():
+def test_values_in_a_shell_script_are_variable_references_and_elsewhere_passed_as_they_are():
     name = "a;touch x;b.osc"
-    assert substitute(["sh", "-c", "run {SCENARIO} > {OUTPUT_DIR}/log"], name, "res/a b") == [
-        "sh", "-c", "run 'a;touch x;b.osc' > 'res/a b'/log"]
-    assert substitute(["/bin/bash", "-ec", "run {SCENARIO}"], name, "o")[2] == "run 'a;touch x;b.osc'"
-    assert substitute(["python3", "-c", "print('{SCENARIO}')"], name, "o")[2] == "print('a;touch x;b.osc')"
-    assert substitute(["sh", "script.sh", "{SCENARIO}"], name, "o") == ["sh", "script.sh", name]
+    launch = substitute(["sh", "-c", "run {SCENARIO} > {OUTPUT_DIR}/log"], name, "res/a b")
+    assert launch.argv == ("sh", "-c", 'run "${SCENARIO}" > "${OUTPUT_DIR}"/log')
+    assert dict(launch.environment) == {"SCENARIO": name, "OUTPUT_DIR": "res/a b"}
+    assert substitute(["/bin/bash", "-ec", "run '{SCENARIO}'"], name, "o").argv[2] == "run ''\"${SCENARIO}\"''"
+    assert substitute(["sh", "-c", 'run "x{SCENARIO}"'], name, "o").argv[2] == 'run "x${SCENARIO}"'
+    assert substitute(["env", "-i", "sh", "-c", "run {SCENARIO}"], name, "o").argv[:4] == (
+        "env", "-i", f"SCENARIO={name}", "OUTPUT_DIR=o")
+    assert substitute(["sh", "script.sh", "{SCENARIO}"], name, "o").argv == ("sh", "script.sh", name)
+
+
+def test_a_placeholder_where_no_reference_is_safe_is_refused():
+    for command in (["python3", "-c", "print('{SCENARIO}')", "{OUTPUT_DIR}"],
+                    ["sh", "-c", "run \\{SCENARIO} {OUTPUT_DIR}"],
+                    ["sudo", "sh", "-c", "run {SCENARIO} {OUTPUT_DIR}"],
+                    ["ssh", "host", "run", "{SCENARIO}", "{OUTPUT_DIR}"]):
+        with pytest.raises(BadCommand, match="file name|backslash|environment"):
+            check_command(command, require_executable=False)
+    check_command(["sudo", "sh", "-c", 'run "$1" "$2"', "sh", "{SCENARIO}", "{OUTPUT_DIR}"],
+                  require_executable=False)
+
+
+QUOTED_TEMPLATES = {
+    "single": ["sh", "-c", "{child} '{{SCENARIO}}' '{{OUTPUT_DIR}}'"],
+    "double": ["sh", "-c", '{child} "{{SCENARIO}}" "{{OUTPUT_DIR}}"'],
+    "bash-pipefail": ["bash", "-o", "pipefail", "-c", "{child} '{{SCENARIO}}' '{{OUTPUT_DIR}}' | cat"],
+    "timeout": ["timeout", "600", "sh", "-c", "{child} '{{SCENARIO}}' '{{OUTPUT_DIR}}'"],
+    "env": ["env", "sh", "-c", "{child} '{{SCENARIO}}' '{{OUTPUT_DIR}}'"],
+    "env-i": ["env", "-i", "sh", "-c", "{child} {{SCENARIO}} {{OUTPUT_DIR}}"],
+    "bare": ["sh", "-c", "{child} {{SCENARIO}} {{OUTPUT_DIR}}"],
+}
+
+
+@pytest.mark.parametrize("form", sorted(QUOTED_TEMPLATES))
+def test_file_names_never_run_as_shell_code_whatever_wraps_or_quotes_the_placeholder(tmp_path, form):
+    child = write_child(tmp_path)
+    write_scenarios(tmp_path / "in", {"a;touch PWN_SEMI;b": "xml=pass", "c$(touch PWN_DOLLAR)d": "xml=pass"},
+                    suffix=".osc")
+    program = " ".join(child_command(child)[:3])
+    template = [arg.format(child=program) for arg in QUOTED_TEMPLATES[form]]
+    done = run_cli(["-i", "in", "-o", "results", "--", *template], tmp_path, cli_env(tmp_path))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert sorted(p.name for p in tmp_path.rglob("PWN*")) == []
+    assert (tmp_path / "results" / "c$(touch PWN_DOLLAR)d" / "test.xml").is_file()
 
 
 def test_a_scenario_named_like_shell_code_does_not_run_it(tmp_path):

@@ -26,7 +26,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from coverage_support import BIN, coverage, run
+from coverage_support import BIN, chromium_page, coverage, run
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
 UPDATE = os.environ.get("SCENARIO_UPDATE_GOLDEN") == "1"
@@ -191,51 +191,33 @@ def test_the_json_report_is_the_golden_document(braking):
     assert abs(first["brake.speed"] - 113.5) < 0.05 and len(repr(first["brake.speed"])) > 8
 
 
-CHROMIUM = os.environ.get("SCENARIO_CHROMIUM", "/usr/bin/chromium")
 
 
 def _browser_page(page_file: Path, screenshot: str | None = None, element: str | None = None):
     """Open ``page_file`` in headless Chromium; returns what a reader sees, as a dict of texts and counts."""
-    if not os.path.exists(CHROMIUM):
-        if os.environ.get("CI"):
-            pytest.fail(f"no Chromium at {CHROMIUM} (.ci/run installs it)")
-        pytest.skip(f"no Chromium at {CHROMIUM}: apt-get install chromium")
-    if os.environ.get("CI"):
-        from playwright.sync_api import sync_playwright
-    else:
-        sync_playwright = pytest.importorskip("playwright.sync_api", reason="pip install -e '.[browser]'").sync_playwright
-    problems: list[str] = []
-    with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            page.on("console", lambda m: problems.append(m.text) if m.type in ("error", "warning") else None)
-            page.on("pageerror", lambda e: problems.append(str(e)))
-            page.goto(page_file.as_uri(), wait_until="load")
-            seen = {
-                "groups": page.locator("section.group h2").all_inner_texts(),
-                "scatters": page.locator("svg.scatter").count(),
-                "points": page.locator("svg.scatter circle").count(),
-                "failed points": page.locator("svg.scatter circle.failed").count(),
-                "error points": page.locator("svg.scatter circle.error").count(),
-                "heat maps": page.locator("table.heat").count(),
-                "not sampled cells": page.locator("table.heat td.notsampled").count(),
-                "failing rows": page.locator("#failing tbody tr").all_inner_texts(),
-                "records": page.locator("table.records tbody tr").all_inner_texts(),
-                "callouts": page.locator(".callout").all_inner_texts(),
-            }
-            if screenshot:
-                folder = Path(os.environ.get("SCENARIO_ARTIFACTS", Path(__file__).resolve().parents[1] / ".ci" /
-                                             "artifacts"))
-                folder.mkdir(parents=True, exist_ok=True)
-                if element:
-                    page.locator(element).first.screenshot(path=str(folder / screenshot))
-                    page.screenshot(path=str(folder / screenshot.replace(".png", "-page.png")), full_page=True)
-                else:
-                    page.screenshot(path=str(folder / screenshot), full_page=True)
-                seen["screenshot"] = folder / screenshot
-        finally:
-            browser.close()
+    with chromium_page(page_file) as (page, problems, _):
+        seen = {
+            "groups": page.locator("section.group h2").all_inner_texts(),
+            "scatters": page.locator("svg.scatter").count(),
+            "points": page.locator("svg.scatter circle").count(),
+            "failed points": page.locator("svg.scatter circle.failed").count(),
+            "error points": page.locator("svg.scatter circle.error").count(),
+            "heat maps": page.locator("table.heat").count(),
+            "not sampled cells": page.locator("table.heat td.notsampled").count(),
+            "failing rows": page.locator("#failing tbody tr").all_inner_texts(),
+            "records": page.locator("table.records tbody tr").all_inner_texts(),
+            "callouts": page.locator(".callout").all_inner_texts(),
+        }
+        if screenshot:
+            folder = Path(os.environ.get("SCENARIO_ARTIFACTS", Path(__file__).resolve().parents[1] / ".ci" /
+                                         "artifacts"))
+            folder.mkdir(parents=True, exist_ok=True)
+            if element:
+                page.locator(element).first.screenshot(path=str(folder / screenshot))
+                page.screenshot(path=str(folder / screenshot.replace(".png", "-page.png")), full_page=True)
+            else:
+                page.screenshot(path=str(folder / screenshot), full_page=True)
+            seen["screenshot"] = folder / screenshot
     assert problems == []
     return seen
 
@@ -244,8 +226,8 @@ def test_the_html_report_shows_every_section(braking):
     done = coverage("html", "results", "--plan", "plan.yaml", "-o", "coverage.html", cwd=braking)
     assert done.returncode == 0 and done.stdout.startswith("wrote coverage.html"), done.stderr
     seen = _browser_page(braking / "coverage.html")
-    assert seen["groups"] == ["Items at a glance", "Varied parameters", "Cover items", "Record items",
-                              "Failing runs (5)"]
+    assert seen["groups"] == ["Failures by kind (5 in 2 group(s))", "Items at a glance", "Varied parameters",
+                              "Cover items", "Record items", "Failing runs (5)"]
     assert seen["scatters"] == 1 and seen["points"] == 12
     assert seen["failed points"] == 2 and seen["error points"] == 3
     assert seen["heat maps"] == 6 and seen["not sampled cells"] == 2

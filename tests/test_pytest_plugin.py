@@ -70,3 +70,32 @@ def test_without_osc_nothing_changes(tmp_path):
     assert both.returncode == 0 and "2 passed" in both.stdout
     missing = pytest_run(tmp_path, "--osc", "nowhere")
     assert missing.returncode == 4 and "--osc nowhere: no such file or folder" in missing.stderr
+
+
+def test_items_whose_ids_read_alike_get_folders_of_their_own(tmp_path):
+    folder = tmp_path / "sc3"
+    folder.mkdir()
+    (folder / "x y.osc").write_text(GOOD.replace("good", "s"))
+    (folder / "x_y.osc").write_text(COVERED.replace("covered", "s"))
+    done = pytest_run(tmp_path, "--osc", "sc3", "-q")
+    assert done.returncode == 0, done.stdout + done.stderr
+    folders = sorted(p.name for p in (tmp_path / "osc-results").iterdir())
+    assert len(folders) == 2 and all(name.startswith("sc3_x_y.osc__s-") for name in folders), folders
+    logs = sorted((tmp_path / "osc-results" / name / "log.txt").is_file() for name in folders)
+    coverage = [name for name in folders if (tmp_path / "osc-results" / name / "coverage.json").is_file()]
+    assert logs == [True, True] and len(coverage) == 1
+    (folder / "x y.osc").unlink()                        # alone, an item keeps its readable folder name
+    assert pytest_run(tmp_path, "--osc", "sc3", "-q").returncode == 0
+    assert (tmp_path / "osc-results" / "sc3_x_y.osc__s" / "coverage.json").is_file()
+
+
+def test_a_timeout_ends_the_scenarios_whole_process_tree(tmp_path):
+    folder = tmp_path / "scen"
+    folder.mkdir()
+    (folder / "hang.osc").write_text("import osc.helpers\nscenario hang:\n    do serial:\n"
+                                     "        run_process('sleep 61.37')\n")
+    done = pytest_run(tmp_path, "--osc", "scen", "--osc-timeout", "3", "-q")
+    assert done.returncode == 1 and "timed out after 3 s" in done.stdout, done.stdout
+    left = subprocess.run(["pgrep", "-f", "sleep 61.37"], capture_output=True, text=True)
+    assert left.returncode != 0, f"orphans left: {left.stdout}"
+    assert "aborted by SIGTERM" in (tmp_path / "osc-results" / "scen_hang.osc__hang" / "test.xml").read_text()

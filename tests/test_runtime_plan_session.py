@@ -123,11 +123,24 @@ def test_report_writer_rewrites_only_the_reports_that_changed(tmp_path):
     first = ScenarioResult("a", True, start_time=1.0, output_dir=str(tmp_path / "a"))
     assert writer.update([first]) == [tmp_path / "a/test.xml"]
     second = ScenarioResult("b", False, "not run", output_dir=str(tmp_path / "b"), skipped=True)
-    assert writer.update([first, second]) == [tmp_path / "b/test.xml"]
-    assert writer.update([first, second]) == []
+    assert writer.update([first, second], final=True) == [tmp_path / "b/test.xml"]
+    assert writer.update([first, second], final=True) == []
     case = ET.parse(tmp_path / "b/test.xml").getroot().find(".//testcase")
     assert case.find("skipped").get("message") == "not run" and case.get("timestamp") is None
     combined = ReportWriter(str(tmp_path / "all"), per_scenario=False)
     assert combined.update([first, second]) == [tmp_path / "all/test.xml"]
     suite = ET.parse(tmp_path / "all/test.xml").getroot().find("testsuite")
     assert suite.get("tests") == "2" and suite.get("skipped") == "1" and suite.get("failures") == "0"
+
+
+def test_report_writer_waits_in_proportion_to_what_a_write_costs(tmp_path):
+    """A report of k results costs k to write: rewriting it after each of n scenarios cost n² (issue 32
+    item 8). The next write waits REWRITE_RATIO times the last write's duration; the final one never."""
+    writer = ReportWriter(str(tmp_path), per_scenario=False)
+    writer.REWRITE_RATIO = 1e9                       # (any write then makes the next one wait for ever)
+    results = [ScenarioResult("a", True, start_time=1.0)]
+    assert writer.update(results) == [tmp_path / "test.xml"]
+    results.append(ScenarioResult("b", True, start_time=2.0))
+    assert writer.update(results) == []
+    assert writer.update(results, final=True) == [tmp_path / "test.xml"]
+    assert ET.parse(tmp_path / "test.xml").getroot().find("testsuite").get("tests") == "2"

@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 
 from coverage_engine.coverage.input_domains import InputValueBuckets, nice_width, numeric_order, range_axis
-from coverage_engine.files.sce_domains import (
+from coverage_engine.domains import (
     MAX_DOMAIN_LINE,
     InputDomain,
     domain_line,

@@ -106,7 +106,9 @@ def test_a_new_store_packs_variant_rows_in_8k_pages_and_an_old_one_keeps_its_pag
     old = tmp_path / "old.db"                       # a store made before (4 KiB pages, WAL)
     with sqlite3.connect(old) as conn:
         conn.execute("PRAGMA journal_mode=WAL")
-        conn.execute("CREATE TABLE unrelated (x INTEGER)")
+        conn.execute("CREATE TABLE store_meta (key VARCHAR(64) PRIMARY KEY, value VARCHAR(255) NOT NULL, "
+                     "schema_version INTEGER NOT NULL)")
+        conn.execute("INSERT INTO store_meta VALUES ('schema', 'scenario-coverage', 2)")
     engine = open_engine(f"sqlite:///{old}")
     _record(engine, "/o")
     assert count_rows(engine)["variants"] == 6

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from cli_support import run_variation
 
+from coverage_engine.domains import drawn_text
 from coverage_engine.files.sce import read_sce
 
 FIVE = {"a": [0, 1, 2, 3, 4], "b": [0, 1, 2, 3, 4], "c": [0, 1, 2, 3, 4], "d": [0, 1, 2, 3],
@@ -192,6 +193,7 @@ def test_drawn_numbers_in_exponent_form_read_back_the_same_everywhere(tmp_path):
         assert isinstance(d, float) and 0.0 <= d <= 0.0001 and isinstance(w, float) and 1.0 <= w <= 2.0
         text = path.read_text()
         assert f"keep(it == {d!r})" in text and f"keep(it == {w!r})" in text
-        assert f"# t.d = {d!r}\n" in text and f"# t.w = {w!r}\n" in text
+        # the header comment shows the value rounded to 4 significant digits (the assignment keeps it exact)
+        assert f"# t.d = {drawn_text(d)}\n" in text and f"# t.w = {drawn_text(w)}\n" in text
         exponents += "e-" in repr(d)
     assert exponents >= 10          # all but the top stratum (values of 1e-4 and up) print an exponent

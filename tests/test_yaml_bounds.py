@@ -64,3 +64,14 @@ def test_ordinary_aliases_still_work(tmp_path, copies):
     done = run("cli.scenario_execution", "words.osc", "--scenario-parameter-file", "params.yaml", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "['hello', " + "'hello', " * (copies - 1) + "'hello']" in done.stdout + done.stderr
+
+
+def test_a_bomb_of_bytes_is_refused_by_scenario_variation(tmp_path):
+    """50,000 aliases of one 4 MB string pass the node bound and stand for 200 GB (issue 32 item 4)."""
+    (tmp_path / "bytes.yaml").write_text("big: &big " + "x" * (4 * 1024 * 1024) + "\nmany: ["
+                                         + ", ".join(["*big"] * 50_000) + "]\n")
+    done = run("cli.scenario_variation", str(HELLO), "--scenario-parameter-file", "bytes.yaml", "-o", "out",
+               "--store", f"sqlite:///{tmp_path / 's.db'}", cwd=tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.startswith("bytes.yaml:2:7: error: this YAML stands for more than 64 MiB of text")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").glob("*.sce"))

@@ -32,7 +32,7 @@ from coverage_engine.coverage.model import (
 )
 from coverage_engine.coverage.plan import CoveragePlan
 from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
-from coverage_engine.files.sce_domains import InputDomain
+from coverage_engine.domains import InputDomain
 from coverage_engine.results.verdicts import FAILING
 
 #: Most cells a cross may have to be graded and drawn.

@@ -23,7 +23,7 @@ from dataclasses import replace
 from importlib import resources
 
 from coverage_engine.coverage.buckets import Bucket, DistinctBuckets, format_number, value_label
-from coverage_engine.files.sce_domains import InputDomain, numeric_value, unit_of
+from coverage_engine.domains import InputDomain, numeric_value, unit_of
 
 #: Most buckets a drawn range is split into.
 MAX_DRAWN_BUCKETS = 20
@@ -191,9 +191,10 @@ class InputValueBuckets(DistinctBuckets):
         if ordered is None or len(ordered) <= INPUT_VALUES_LIMIT:
             ordered = ordered or seen
             return [Bucket(value_label(k), value=k) for k in ordered], {k: i for i, k in enumerate(ordered)}
-        numbers = [numeric_value(k) or 0.0 for k in ordered]     # all numeric: numeric_order ordered them
+        numbers = [n for n in map(numeric_value, ordered) if n is not None]   # all numbers: see numeric_order
         units = {unit_of(k) for k in ordered}
-        ran = InputDomain("", low=numbers[0], high=numbers[-1], unit=units.pop() if len(units) == 1 else "",
+        ran = InputDomain("", low=min(numbers), high=max(numbers), unit=units.pop() if len(units) == 1 else "",
                           count=len(ordered))
         axis = range_axis(ran)
-        return axis.buckets(), {k: axis.index(n) or 0 for k, n in zip(ordered, numbers, strict=True)}
+        return axis.buckets(), {k: (axis.index(n) or 0) if n is not None else 0
+                               for k, n in zip(ordered, numbers, strict=True)}

@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.buckets import value_label
-from coverage_engine.files.sce_domains import drawn_text
+from coverage_engine.domains import drawn_text
 from coverage_engine.results.verdicts import FAILING
 
 #: The prefix of the items of varied parameters (``input:<parameter>``).

@@ -99,7 +99,7 @@ def _mapping(file: str, node: yaml.Node, what: str, allowed: tuple[str, ...], te
 def _scalar(file: str, node: yaml.Node, text: str) -> object:
     if not isinstance(node, yaml.ScalarNode):
         raise _error(file, node, "must be a number", text)
-    return yaml.safe_load(node.value) if node.style is None else node.value
+    return yaml.safe_load(node.value) if not node.style else node.value   # plain: None (Python), "" (libyaml)
 
 
 def _weight(file: str, node: yaml.Node, text: str) -> float:

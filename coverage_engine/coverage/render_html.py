@@ -16,6 +16,7 @@ from importlib import resources
 from urllib.parse import quote
 
 from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult, short_name
+from coverage_engine.coverage.render_history_html import history_sections
 from coverage_engine.coverage.render_svg import scatter_svg
 
 MAX_CHIPS = 6
@@ -425,7 +426,7 @@ class _Page:
             f'<header class="top"><h1>Scenario coverage {state}</h1>'
             f'<div class="sub">{escape(report.source)} · {len(report.runs)} run(s) · generated {escape(generated)}'
             '</div></header><main>'
-            + self.cards() + self.callouts() + self.overview() + self.item_groups() + self.records()
+            + self.cards() + self.callouts() + history_sections(report) + self.overview() + self.item_groups() + self.records()
             + self.failing_runs()
             + '<footer>scenario_coverage · one file, no network: share it as it is.</footer></main></body></html>\n')
 

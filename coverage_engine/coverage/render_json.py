@@ -73,4 +73,8 @@ def report_dict(report: CoverageReport) -> dict[str, Any]:
 
 
 def render_json(report: CoverageReport) -> str:
-    return json.dumps(report_dict(report), indent=1, ensure_ascii=False) + "\n"
+    data = report_dict(report)
+    flaky = report.extra.get("flaky") or ()
+    if flaky:                  # only when there are: reports without flaky variants keep their form
+        data["flaky"] = [{"name": name, "detail": what} for name, what in flaky]
+    return json.dumps(data, indent=1, ensure_ascii=False) + "\n"

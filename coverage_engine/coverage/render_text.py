@@ -6,12 +6,16 @@ out; ``json`` and ``html`` have everything.
 
 from __future__ import annotations
 
+import dataclasses
+from typing import Any
+
 from rich import box
 from rich.console import Console, Group, JustifyMethod
 from rich.table import Table
 from rich.text import Text
 
 from coverage_engine.coverage.model import KIND_TITLES, BucketResult, CoverageReport, ItemResult, short_name
+from coverage_engine.printable import printable
 
 MAX_BUCKET_ROWS = 40
 MAX_GRID_COLUMNS = 12
@@ -30,6 +34,22 @@ _BUCKET_COLUMNS: Columns = (("bucket", "left"), ("hits", "right"), ("runs", "rig
                             ("", "left"), ("failing runs (rerun)", "left"))
 _RECORD_COLUMNS: Columns = (("item", "left"), ("unit", "left"), ("samples", "right"), ("min", "right"),
                             ("min run", "left"), ("median", "right"), ("max", "right"), ("max run", "left"))
+
+
+def escaped(value: Any) -> Any:
+    """``value`` (the report, or any part of it) with every string in it made :func:`printable`."""
+    if isinstance(value, str):
+        return printable(value)
+    if isinstance(value, tuple):
+        return tuple(escaped(part) for part in value)
+    if isinstance(value, list):
+        return [escaped(part) for part in value]
+    if isinstance(value, dict):
+        return {escaped(key): escaped(part) for key, part in value.items()}
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.replace(value, **{f.name: escaped(getattr(value, f.name))
+                                             for f in dataclasses.fields(value) if f.init})
+    return value
 
 
 def percent(value: float | None) -> str:
@@ -276,16 +296,22 @@ def _failing(report: CoverageReport, style: _Style) -> Table | None:
 def plain_width(report: CoverageReport) -> int:
     """Columns for plain output (a file, a CI log): wide enough that no item name or cell is cut or
     wrapped, as there is no terminal width to fit (at least 120)."""
-    longest = max((len(item.name) for item in report.items), default=0)
+    longest = max((len(printable(item.name)) for item in report.items), default=0)
     runs = report.runs
-    failing = max((len(runs.names[i]) + len(runs.values_text(i)) + min(len((runs.reasons[i] or "").split("\n")[0]),
+    failing = max((len(printable(runs.names[i])) + len(printable(runs.values_text(i))) + min(len((runs.reasons[i] or "").split("\n")[0]),
                    MAX_REASON_CHARS) + len(runs.logs[i] or runs.folders[i] or "") for i in runs.failing()[:MAX_FAILING_RUNS]),
                   default=0)
     return max(120, longest + 100, failing + 30)
 
 
 def render_text(report: CoverageReport, console: Console, *, plain: bool) -> None:
-    """Print ``report`` on ``console``; ``plain`` uses ASCII bars and boxes and no colour."""
+    """Print ``report`` on ``console``; ``plain`` uses ASCII bars and boxes and no colour.
+
+    Every name and value came from results a child wrote: each is shown :func:`printable` (no ESC, CSI
+    or OSC sequence reaches the terminal or the file), and ``console`` must be made with
+    ``markup=False`` so that ``[bold]`` in a name is text, not style.
+    """
+    report = escaped(report)
     style = _Style(plain)
     console.print(Group(*_summary(report, style)))
     console.print()
@@ -324,3 +350,9 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
         if section is not None:
             console.print(section)
             console.print()
+    flaky = report.extra.get("flaky") or ()
+    if flaky:                  # variants that passed and failed (their attempts, or the store's batches)
+        console.print(style.styled(f"Flaky variants ({len(flaky)})", "yellow"))
+        for name, what in flaky:
+            console.print(Text(f"  {name} - {what}"))
+        console.print()

@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import yaml
 
@@ -25,12 +26,13 @@ from coverage_engine.coverage.errors import ResultsError, RunFileError, location
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import (
+from coverage_engine.domains import (
     HEADER_CHARS,
     InputDomain,
     header_domains,
     read_declared,
 )
+from coverage_engine.printable import clean_text, surrogates_escaped
 from coverage_engine.results.files import COVERAGE_FILE, DECLARED_FILE, LOG_FILE, RESULT_FILE
 from coverage_engine.results.read import JunitUnreadable
 from coverage_engine.results.verdicts import (
@@ -72,7 +74,7 @@ def _assignment_from_sce(path: str) -> dict[str, object]:
         if os.path.getsize(path) > MAX_SCE_BYTES:
             return {}
         with open(path, encoding="utf-8") as handle:
-            doc = load_bounded(handle.read(), yaml.SafeLoader)
+            doc = load_bounded(handle.read())
     except (OSError, UnicodeDecodeError, yaml.YAMLError, YamlLimitError):
         return {}
     assignment = doc.get("assignment") if isinstance(doc, dict) else None
@@ -114,7 +116,7 @@ class _Reader:
         if not os.path.lexists(path):
             return None
         if not _inside(self.root, path):
-            self.skipped_links.append(str(path))
+            self.skipped_links.append(surrogates_escaped(str(path)))
             return None
         return path if path.is_file() else None
 
@@ -135,24 +137,36 @@ class _Reader:
             assignment = dict(coverage.run.assignment)
             if coverage.run.source:
                 self.declare(coverage.run.source, assignment)
-        return RunInput(
-            name=name, verdict=verdict, reason=reason, folder=str(folder) if folder is not None else None,
-            log=str(log) if log is not None else None, assignment=assignment,
+        return RunInput(   # paths as text: a byte that is not UTF-8 escaped (a report cannot hold it raw)
+            name=name, verdict=verdict, reason=reason,
+            folder=surrogates_escaped(str(folder)) if folder is not None else None,
+            log=surrogates_escaped(str(log)) if log is not None else None, assignment=assignment,
             items=coverage.items if coverage else (), samples=coverage.samples if coverage else (),
             ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else ())
 
 
-def _job_folders(root: Path, reader: _Reader) -> dict[str, Path]:
-    folders: dict[str, Path] = {}
+class JobFolder(NamedTuple):
+    """A job's folder: its name as text (bytes that are not UTF-8 escaped, as the batch names such a job)
+    and where it is."""
+
+    name: str
+    path: Path
+
+
+def _job_folders(root: Path, reader: _Reader) -> dict[str, JobFolder]:
+    """The job folders of ``root`` by the name the merged report gives their job (:func:`clean_text`: an
+    ESC in a name is U+FFFD there), so a folder and its testsuite are one run, never two."""
+    folders: dict[str, JobFolder] = {}
     for entry in sorted(os.scandir(root), key=lambda e: e.name):
         if entry.name.startswith(".") or not entry.is_dir():
             continue
         path = root / entry.name
         if entry.is_symlink() and not _inside(root, path):
-            reader.skipped_links.append(str(path))
+            reader.skipped_links.append(surrogates_escaped(str(path)))
             continue
         if any(os.path.lexists(path / name) for name in (RESULT_FILE, COVERAGE_FILE, LOG_FILE)):
-            folders[entry.name] = path
+            name = surrogates_escaped(entry.name)
+            folders[clean_text(name)] = JobFolder(name, path)
     return folders
 
 
@@ -179,7 +193,7 @@ def _single_run(root: Path, reader: _Reader) -> Iterator[RunInput]:
     yield reader.run(name, root, verdict, reason, {}, coverage)
 
 
-def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _Reader,
+def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reader: _Reader,
                   source: RunSource) -> Iterator[RunInput]:
     listed: set[str] = set()
     report_time = report.stat().st_mtime
@@ -187,15 +201,18 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _R
     try:
         for suite in iter_suite_verdicts(report):
             name = suite.name
-            listed.add(name)
+            listed.add(clean_text(name))
             verdict = suite.verdict
             status = VERDICT_OF_STATE.get(suite.properties.get("status", ""))
             if verdict is Verdict.PASSED and status in FAILING:
                 verdict = status   # the process failed although its testcases passed
             reason = None if verdict == "passed" else suite.reason or suite.properties.get("reason")
-            folder = folders.get(name)
+            job_folder = folders.get(name)
+            folder = None if job_folder is None else job_folder.path
+            if job_folder is not None:
+                name = job_folder.name                 # the job's own name, as the store has it
             if folder is None:
-                reader.missing_folders += 1
+                reader.missing_folders += "repeat.count" not in suite.properties
             elif any((folder / f).exists() and (folder / f).stat().st_mtime > report_time + 1
                      for f in (RESULT_FILE, COVERAGE_FILE)):
                 newer += 1
@@ -207,6 +224,15 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _R
             else:
                 assignment = reader.in_declared_order(assignment, scenario_file)
             reader.declare(scenario_file, assignment)
+            if "repeat.count" in suite.properties:       # a repeated variant: each attempt is a run
+                attempts = repeat_attempts(suite.properties)
+                listed.update(clean_text(job) for job, _, _ in attempts)
+                for job, attempt_verdict, attempt_reason in attempts:
+                    found = folders.get(clean_text(job))
+                    where = found.path if found is not None else None
+                    coverage = reader.coverage(where) if where is not None else None
+                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage)
+                continue
             coverage = reader.coverage(folder) if folder is not None else None
             yield reader.run(name, folder, verdict, reason, assignment, coverage)
     except JunitUnreadable as exc:
@@ -227,9 +253,31 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, Path], reader: _R
                             f"their cover items")
 
 
-def _unmerged(names: list[str], folders: dict[str, Path], reader: _Reader) -> Iterator[RunInput]:
-    for name in names:
-        folder = folders[name]
+#: How a repeated variant's attempt outcome (``repeat.attempt.<k>``) reads as a run verdict.
+_ATTEMPT_VERDICTS = {state: verdict for state, verdict in VERDICT_OF_STATE.items()
+                     if verdict is Verdict.PASSED or verdict in FAILING}
+
+
+def repeat_attempts(properties: dict[str, str]) -> list[tuple[str, str, str | None]]:
+    """``(job name, verdict, reason)`` of each attempt of a repeated variant's testsuite, from its
+    ``repeat.attempt.<k>`` properties; an attempt that never ran is ``skipped``."""
+    try:
+        count = int(properties.get("repeat.count", "0"))
+    except ValueError:
+        return []
+    attempts = []
+    for number in range(1, count + 1):
+        job = properties.get(f"repeat.attempt.{number}.job")
+        if not job:
+            continue
+        verdict = _ATTEMPT_VERDICTS.get(properties.get(f"repeat.attempt.{number}", ""), "skipped")
+        attempts.append((job, verdict, properties.get(f"repeat.attempt.{number}.reason")))
+    return attempts
+
+
+def _unmerged(keys: list[str], folders: dict[str, JobFolder], reader: _Reader) -> Iterator[RunInput]:
+    for key in keys:
+        name, folder = folders[key]
         coverage = reader.coverage(folder)
         report = reader.file(folder, RESULT_FILE)
         verdict: str
@@ -251,7 +299,7 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
         raise ResultsError("not a folder (give a results folder or a run's output folder)", location(str(given)))
     root = given.resolve()
     reader = _Reader(root)
-    source = RunSource(label=str(given), runs=iter(()), root=str(root))
+    source = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(root))
     source.declare(read_declared(str(root / DECLARED_FILE)))     # the batch's record; .sce headers add to it
     report = reader.file(root, RESULT_FILE)
     if report is None and reader.file(root, COVERAGE_FILE) is None:

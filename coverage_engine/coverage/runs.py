@@ -12,7 +12,7 @@ from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.run_records import ItemDecl
-from coverage_engine.files.sce_domains import InputDomain
+from coverage_engine.domains import InputDomain
 from coverage_engine.results.verdicts import Verdict
 
 #: Verdicts of a run in a report: the run file's four, plus ``pending`` (queued or running, not finished).

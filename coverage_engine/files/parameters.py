@@ -30,10 +30,10 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
         raise ParameterFileError("scenario parameter file not found", whole_file) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterFileError(f"cannot read scenario parameter file: {exc}", whole_file) from exc
-    from coverage_engine.yaml_bounds import YamlLimitError, load_all_bounded, with_unique_keys
+    from coverage_engine.yaml_bounds import SAFE_LOADER, YamlLimitError, load_all_bounded, with_unique_keys
 
     try:
-        documents = list(load_all_bounded(text, with_unique_keys(yaml.SafeLoader)))
+        documents = list(load_all_bounded(text, with_unique_keys(SAFE_LOADER)))
     except YamlLimitError as exc:           # too big, an alias bomb, or a key written twice (DuplicateKeyError)
         lines = text.splitlines()
         line = lines[exc.line - 1] if 0 < exc.line <= len(lines) else None

@@ -46,9 +46,10 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from coverage_engine.domains import InputDomain, header_domains
 from coverage_engine.errors import SceFormatError
-from coverage_engine.files.sce_domains import InputDomain, header_domains
 from coverage_engine.files.sce_plain import load_plain
+from coverage_engine.limits import MAX_YAML_BYTES, mib
 from coverage_engine.location import Location
 
 #: The format version this release writes.
@@ -141,9 +142,15 @@ def is_sce_text(head: str) -> bool:
 def _load_yaml(text: str, path: str):
     import yaml
 
-    from coverage_engine.yaml_bounds import DuplicateKeyError, YamlLimitError, load_bounded, with_unique_keys
+    from coverage_engine.yaml_bounds import (
+        SAFE_LOADER,
+        DuplicateKeyError,
+        YamlLimitError,
+        load_bounded,
+        with_unique_keys,
+    )
 
-    loader = with_unique_keys(getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    loader = with_unique_keys(SAFE_LOADER)
     try:
         return load_bounded(text, loader)
     except DuplicateKeyError as exc:
@@ -262,8 +269,8 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     if parameters is not None and not isinstance(parameters, dict):
         raise SceFormatError("malformed .sce file: 'parameters' must be a mapping", where)
     index = data.get("index")
-    if index is not None and (not isinstance(index, int) or isinstance(index, bool)):
-        raise SceFormatError("malformed .sce file: 'index' must be an integer", where)
+    if index is not None and (not isinstance(index, int) or isinstance(index, bool) or index < 0):
+        raise SceFormatError(f"malformed .sce file: 'index' must be an integer, 0 or more (got {index!r})", where)
     model = data["model"]
     scenario = data["scenario"]
     if scenario:
@@ -304,7 +311,10 @@ def read_sce(path: str | os.PathLike) -> SceDocument:
             key = (path, stat.st_size, stat.st_mtime_ns, stat.st_ino)
             if key in _recent:
                 return _recent[key]
-            text = handle.read()
+            if stat.st_size > MAX_YAML_BYTES:
+                raise SceFormatError(f"{path}: {stat.st_size:,} bytes, larger than the limit of "
+                                     f"{mib(MAX_YAML_BYTES)} for a .sce file")
+            text = handle.read(MAX_YAML_BYTES + 1)
     except FileNotFoundError as exc:
         raise SceFormatError(f"{path}: no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:

@@ -18,8 +18,8 @@ from array import array
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from coverage_engine.domains import InputDomain, domain_line, drawn_text
 from coverage_engine.files.sce import SCE_END, SCE_FORMAT_VERSION, SCE_MAGIC
-from coverage_engine.files.sce_domains import InputDomain, domain_line, drawn_text
 from coverage_engine.files.sce_plain import YAML_SPECIAL
 from coverage_engine.lazy import Mapped, NumberTexts, per_choice, row_texts
 

@@ -43,6 +43,24 @@ class _Inline(list):
 _bound_rules: dict[int, list] = {}
 
 
+def _splice(inline: tuple[bool, ...], children: list[object]) -> _Inline:
+    """``children`` with the inlined ones spliced in. A left-recursive list (``_declaration*`` is
+    ``list: list item | item``) grows its first child in place: that child is off the value stack
+    already, and copying it at every item made a file of n declarations cost n² (80,000 scenarios:
+    84 s; a million: hours)."""
+    if children and inline[0] and type(children[0]) is _Inline:
+        spliced, start = children[0], 1
+    else:
+        spliced, start = _Inline(), 0
+    assert isinstance(spliced, _Inline)
+    for flag, child in zip(inline[start:], children[start:], strict=True):
+        if flag and type(child) is _Inline:
+            spliced.extend(child)
+        else:
+            spliced.append(child)
+    return spliced
+
+
 def run(tokens, builder, state_box: list[int]) -> object:
     """Drive the LALR table over ``tokens`` calling ``builder.<rule>(children)`` on each reduction.
 
@@ -93,17 +111,11 @@ def run(tokens, builder, state_box: list[int]) -> object:
             else:
                 children = []
             if inline is not None:
-                spliced: list[object] = []
-                for flag, child in zip(inline, children, strict=True):
-                    if flag and type(child) is _Inline:
-                        spliced.extend(child)
-                    else:
-                        spliced.append(child)
-                children = spliced
+                children = _splice(inline, children)
             if expand1 and len(children) == 1:
                 value = children[0]
-            elif callback is None:
-                value = _Inline(children)  # an inlined rule (or a ?rule, which always has one child)
+            elif callback is None:   # an inlined rule (or a ?rule, which always has one child)
+                value = children if type(children) is _Inline else _Inline(children)
             else:
                 value = callback(children)
             goto = states[state_stack[-1]][origin][1]

@@ -15,6 +15,7 @@ import os
 from pathlib import Path
 
 from coverage_engine.errors import OscError, OscSyntaxError
+from coverage_engine.limits import MAX_SOURCE_BYTES, mib
 from coverage_engine.location import Location
 from coverage_engine.parse import cache
 from coverage_engine.parse.lalr import ParseFailure
@@ -47,11 +48,16 @@ def parse_text(text: str, file: str) -> CompilationUnit:
 
 
 def parse_file(path: str | Path) -> CompilationUnit:
-    """Read ``path`` as UTF-8 and parse it; an unreadable file is an :class:`OscError` naming it."""
+    """Read ``path`` as UTF-8 and parse it; an unreadable file, or one larger than
+    :data:`MAX_SOURCE_BYTES`, is an :class:`OscError` naming it."""
     path = Path(path)
     try:
         with open(path, encoding="utf-8", newline="") as handle:
-            text = handle.read()
+            size = os.fstat(handle.fileno()).st_size
+            if size > MAX_SOURCE_BYTES:
+                raise OscError(f"{path}: {size:,} bytes, larger than the limit of "
+                               f"{mib(MAX_SOURCE_BYTES)} for a scenario file")
+            text = handle.read(MAX_SOURCE_BYTES + 1)
     except UnicodeDecodeError as exc:
         raise OscError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:

@@ -16,21 +16,14 @@ Totals are always computed from the testcases, never copied. Times are written a
 
 from __future__ import annotations
 
-import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-#: Characters XML 1.0 cannot carry (and PostgreSQL text cannot hold NUL); replaced before writing.
-_ILLEGAL_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+from coverage_engine.printable import clean_text as clean_text  # (where the JUnit writers look for it)
 
 #: The outcomes a testcase can have; all but ``passed`` are written as an element of that name.
 OUTCOMES = ("passed", "failure", "error", "skipped")
-
-
-def clean_text(text: str) -> str:
-    """``text`` without the characters XML 1.0 (and PostgreSQL) refuse, each replaced by U+FFFD."""
-    return _ILLEGAL_XML.sub("\ufffd", text)
 
 
 def junit_time(seconds: float | None) -> str:

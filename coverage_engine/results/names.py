@@ -22,7 +22,7 @@ import re
 from collections.abc import Mapping
 from pathlib import PurePath
 
-from coverage_engine.files.sce_domains import drawn_text, header_domains
+from coverage_engine.domains import drawn_text, header_domains
 
 #: Longest testcase name written (CI pages cut long names; the stem at its start keeps it unique).
 MAX_NAME_CHARS = 120

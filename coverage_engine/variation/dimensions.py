@@ -228,8 +228,10 @@ def _range_choices(right: s.Expression) -> tuple[list[Choice], RangeSpec | None]
     step = step if step is not None else 1
     count = int((high - low) / step + 1e-9) + 1
     if count > MAX_RANGE_VALUES:
-        raise ResolveError(f"this range lists {count} values (more than {MAX_RANGE_VALUES:,}); use a larger step, "
-                           "or draw values with --strategy lhs|random|sobol|halton", where)
+        # (whatever the strategy: a sampler takes a stepped range's values as listed, so it must lose its step)
+        raise ResolveError(f"this range lists {count:,} values (more than {MAX_RANGE_VALUES:,}); use a larger step, "
+                           "or write real ends without a step (0.0..10.0) and draw values from it with "
+                           "--strategy lhs|random|sobol|halton --samples N", where)
     values = [low + i * step for i in range(count)]
     if integral:
         values = [int(v) for v in values]

@@ -19,8 +19,8 @@ from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from coverage_engine.domains import InputDomain, listed_domain
 from coverage_engine.files.sce import is_sce_text
-from coverage_engine.files.sce_domains import InputDomain, listed_domain
 from coverage_engine.files.sce_writer import SceTemplate, relative_source_dir
 from coverage_engine.lazy import NumberTexts, per_choice, row_texts
 from coverage_engine.suffixes import SCE_SUFFIX

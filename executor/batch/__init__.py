@@ -1,19 +1,25 @@
 """The batch runner: scenario files become jobs in the store's queue, workers run each as a subprocess.
 
-``inputs``
-    the scenario files (``.osc``/``.sce``), shards, the launch command.
+``inputs`` / ``launch_template``
+    the scenario files (``.osc``/``.sce``), shards, the launch command and its placeholders (never code).
 ``orchestration``
     what the command line calls: enqueue, run the workers, write the merged report; ``errors`` its failures.
-``worker``
-    the claim/run/finish loop (no SQL), with ``watchdog`` (leases, stalled jobs).
+``worker`` and its parts
+    the claim/run/finish loop (no SQL), handing its events to ``claim_pacing`` (when to claim, back-off
+    while the store is away), ``hand_over`` (the fork server, jobs held ahead), ``recorder`` (store writes
+    of starts and results, grouped), ``leases`` (heartbeats, sweeps) and ``watchdog`` (a runner that dies
+    takes its processes with it).
 ``job_run`` / ``job_folders``
     one attempt in a thread and the job's own folder.
 ``builtin_runner`` / ``fork_server`` / ``fork_protocol``
     the built-in runner: jobs forked from a server that has imported the runtime once.
 ``verdict``
     judging an attempt: how the child ended and the ``test.xml`` it left become a job state and a reason.
-``junit_merge`` / ``failure_summary``
-    the merged report of the store's jobs (built with :mod:`coverage_engine.results`) and the end-of-run list.
+``junit_merge`` / ``batch_outcome`` / ``failure_summary``
+    the merged report of the store's jobs (built with :mod:`coverage_engine.results`), one verdict per
+    variant, and the end-of-run list.
+``repeats`` / ``flaky`` / ``history``
+    ``--repeat``, flaky variants, and the batches of one store over time.
 ``folder_history`` / ``coverage_source``
     the chain of batches of one folder, and its runs as the coverage model's input.
 ``progress`` / ``status``

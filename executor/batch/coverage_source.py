@@ -17,13 +17,14 @@ from collections.abc import Iterable, Iterator
 from coverage_engine.coverage.errors import RunFileError
 from coverage_engine.coverage.run_file import ItemDecl, parse_declarations, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
-from coverage_engine.files.sce_domains import HEADER_CHARS, header_domains
+from coverage_engine.domains import HEADER_CHARS, header_domains
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE
 from coverage_engine.results.read import JunitUnreadable, read_cases
 from coverage_engine.results.verdicts import VERDICT_OF_STATE, Verdict
 from executor.batch.folder_history import batch_chain, latest_of
 from store.coverage_records import CoverageRecords, StoredRun
 from store.database import StoreError
+from store.jobs import Batch
 from store.queue import QueueStore
 from store.states import FINAL
 
@@ -34,7 +35,9 @@ _decode = json.JSONDecoder().raw_decode
 _FINISHED = frozenset(state.value for state in FINAL)
 
 
-def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
+def pick_batch(queue: QueueStore, results: str | None, batch_id: int | None) -> Batch:
+    """The batch a report reads: ``batch_id``, else the latest whose output folder is ``results``, else the
+    latest batch; :class:`StoreError` when there is none."""
     if batch_id is not None:
         return queue.batch(batch_id)
     if results is not None:
@@ -51,9 +54,9 @@ def _pick_batch(queue: QueueStore, results: str | None, batch_id: int | None):
 
 
 class _StoreRuns:
-    def __init__(self, records: CoverageRecords, batch_ids: list[int], source: RunSource) -> None:
+    def __init__(self, records: CoverageRecords, batch_ids: list[int], source: RunSource, own: bool = True) -> None:
         #: The batch and those it continues, oldest first (see :mod:`executor.batch.folder_history`).
-        self.records, self.batch_ids, self.source = records, batch_ids, source
+        self.records, self.batch_ids, self.source, self.own = records, batch_ids, source, own
         self.declarations: dict[int, tuple[tuple[ItemDecl, ...] | None, tuple[str, ...]]] = {}
         self.pending = 0
         self.from_disk = 0
@@ -142,7 +145,8 @@ class _StoreRuns:
             for row in self._rows():
                 yield self._run(row)
         finally:
-            self.records.close()
+            if self.own:
+                self.records.close()
         if self.pending:
             self.source.complete = False
             self.source.notes.append(f"the batch is still running: {self.pending} job(s) have not finished; "
@@ -161,17 +165,25 @@ def store_source(url: str | None, results: str | None = None, batch_id: int | No
     """
     queue = QueueStore.open_existing(url)
     try:
-        batch = _pick_batch(queue, results, batch_id)
+        batch = pick_batch(queue, results, batch_id)
         chain = [each.id for each in reversed(batch_chain(queue, batch))]
     finally:
         queue.close()
-    records = CoverageRecords.open_existing(url)
+    return batch_source(CoverageRecords.open_existing(url), batch, chain)
+
+
+def batch_source(records: CoverageRecords, batch: Batch, chain: list[int] | None = None, *,
+                 own: bool = True) -> RunSource:
+    """The runs of ``batch`` read through ``records``: with ``chain`` (the batch and those it continues,
+    oldest first) the latest job of each name of them all; ``own``: close the records once the runs are
+    read (False for records on an engine the caller keeps, the batch runner's)."""
+    chain = chain or [batch.id]
     label = f"batches {', '.join(map(str, chain))}" if len(chain) > 1 else f"batch {batch.id}"
     source = RunSource(label=f"{label} in {records.url}", runs=iter(()), root=batch.output_dir)
     for batch_id in chain:
         for header in records.variant_headers(batch_id, HEADER_CHARS):
             source.declare(header_domains(header))
-    source.runs = iter(_StoreRuns(records, chain, source))
+    source.runs = iter(_StoreRuns(records, chain, source, own))
     return source
 
 

@@ -78,6 +78,19 @@ def not_passed_in_folder(store: QueueStore, batch: Batch) -> list[NotPassed]:
     return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
 
 
+def triage(store: QueueStore, items: list[NotPassed]) -> list[str]:
+    """The failures grouped by kind (:mod:`coverage_engine.coverage.triage`), shown when there are several,
+    with the varied values each group's variants share; printed before the list of jobs."""
+    from coverage_engine.coverage.triage import Failure, group_failures, triage_lines
+
+    if len(items) < 2:
+        return []
+    infos = variants_of(store.engine, [item.scenario for item in items])
+    failures = [Failure(item.name, item.reason, dict(infos[item.scenario].assignment) if item.scenario in infos
+                        else {}) for item in items]
+    return [printable(line) for line in triage_lines(group_failures(failures))]
+
+
 def summary_lines(items: list[NotPassed]) -> list[str]:
     """The block printed at the end of a batch (empty when every job passed)."""
     if not items:

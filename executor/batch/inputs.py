@@ -1,7 +1,7 @@
 """What a batch is made of: the scenario files of the input folder, the shard to keep, the launch command.
 
 The launch command is a list of argument templates; ``{SCENARIO}`` and ``{OUTPUT_DIR}`` are replaced
-inside each argument and no shell ever sees the result.
+inside each argument and no shell ever reads a value as code (see :mod:`executor.batch.launch_template`).
 """
 
 from __future__ import annotations
@@ -14,12 +14,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from coverage_engine.printable import surrogates_escaped
 from coverage_engine.suffixes import SCENARIO_SUFFIXES
 from executor.batch.errors import BadCommand, BadShard, CommandNotFound, NoScenarios
+from executor.batch.launch_template import OUTPUT_DIR, SCENARIO, Template
 from store.jobs import JobSpec
-
-SCENARIO = "{SCENARIO}"
-OUTPUT_DIR = "{OUTPUT_DIR}"
 
 #: File name endings of scenario files (OpenSCENARIO DSL files and the variants written by scenario_variation).
 
@@ -102,30 +101,38 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
     """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
     specs = []
     # A shard hashes every file to place it, holding only the hashes (not 666,469 files' contents).
-    kept = shard.select([hashlib.sha256(path.read_bytes()).hexdigest() + "\0" + path.name for path in files]) \
-        if shard is not None else None
+    kept = shard.select([_content(path)[0] + "\0" + path.name for path in files]) if shard is not None else None
     real_folders: dict[Path, str] = {}      # each input folder resolved once, not once per file
     for position, path in enumerate(files):
         if kept is not None and position not in kept:
             continue
-        data = path.read_bytes()
-        sha = hashlib.sha256(data).hexdigest()
-        text = None
-        if len(data) <= MAX_STORED_TEXT:
-            try:
-                text = data.decode("utf-8")
-            except UnicodeDecodeError:
-                text = None
-            if text is not None and "\x00" in text:
-                text = None
+        sha, text = _content(path)
         resolved = _real_path(path, real_folders)
         if not _utf8(resolved):
             # The store (and every report) holds text: a name that is not UTF-8 is kept escaped, so this job
-            # alone fails (its file is not found under the escaped name) and the others run.
-            specs.append(JobSpec(name=_escaped(path.stem), scenario_path=_escaped(resolved), scenario_sha=sha))
+            # alone ends as an error saying so (see not_utf8_reason) and the others run.
+            specs.append(JobSpec(name=surrogates_escaped(path.stem), scenario_path=surrogates_escaped(resolved),
+                                 scenario_sha=sha))
             continue
         specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
     return specs
+
+
+def _content(path: Path) -> tuple[str, str | None]:
+    """The file's SHA-256 and, when it is small UTF-8 text without NUL, the text itself. A large file is
+    hashed in chunks, never held whole (a stray 500 MB file costs a 1 MiB buffer, not 500 MB)."""
+    with open(path, "rb") as handle:
+        head = handle.read(MAX_STORED_TEXT + 1)
+        digest = hashlib.sha256(head)
+        if len(head) > MAX_STORED_TEXT:
+            for chunk in iter(lambda: handle.read(MAX_STORED_TEXT), b""):
+                digest.update(chunk)
+            return digest.hexdigest(), None
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError:
+        return digest.hexdigest(), None
+    return digest.hexdigest(), None if "\x00" in text else text
 
 
 def _real_path(path: Path, real_folders: dict[Path, str]) -> str:
@@ -141,7 +148,22 @@ def _real_path(path: Path, real_folders: dict[Path, str]) -> str:
 
 def not_utf8(files: Sequence[Path]) -> list[str]:
     """The files whose names are not UTF-8, escaped for printing (their jobs will fail: rename them)."""
-    return [_escaped(str(p)) for p in files if not _utf8(str(p))]
+    return [surrogates_escaped(str(p)) for p in files if not _utf8(str(p))]
+
+
+_ESCAPED_BYTE = re.compile(r"\\x([89a-f][0-9a-f])")
+
+
+def not_utf8_reason(scenario_path: str) -> str | None:
+    """Why a job cannot run when its recorded path is a name that is not UTF-8, kept escaped (``c\\xff.osc``):
+    the escaped path does not exist and the file of the raw bytes does. None for every other path."""
+    if os.path.lexists(scenario_path) or not _ESCAPED_BYTE.search(scenario_path):
+        return None
+    raw = _ESCAPED_BYTE.sub(lambda m: chr(0xDC00 + int(m.group(1), 16)), scenario_path)
+    if not os.path.lexists(raw):
+        return None
+    return (f"the file name {scenario_path} is not UTF-8 (shown escaped); the store and the reports hold text: "
+            f"rename the file")
 
 
 def _utf8(text: str) -> bool:
@@ -152,9 +174,6 @@ def _utf8(text: str) -> bool:
     return True
 
 
-def _escaped(text: str) -> str:
-    """``text`` with bytes that are not UTF-8 (kept as surrogates) written as ``\\xff``."""
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def check_command(command: Sequence[str], *, require_executable: bool = True) -> tuple[str, ...]:
@@ -166,56 +185,9 @@ def check_command(command: Sequence[str], *, require_executable: bool = True) ->
     if missing:
         raise BadCommand(f"the launch command must contain {' and '.join(missing)} "
                          f"(got: {' '.join(command)})")
+    Template.of(command)                      # refuses a placeholder that a shell could read as code
     program = command[0]
     if require_executable and SCENARIO not in program and OUTPUT_DIR not in program:
         if shutil.which(program) is None:
             raise CommandNotFound(f"launch command not found: {program}")
     return tuple(command)
-
-
-#: Shells whose ``-c`` script argument gets shell-quoted values (as GNU parallel quotes its replacements).
-SHELLS = frozenset({"sh", "bash", "dash", "zsh", "ksh", "mksh", "ash", "busybox"})
-
-
-def substitute(command: Sequence[str], scenario: str, output_dir: str) -> list[str]:
-    """The argument list for one job: placeholders replaced inside every argument, in one pass.
-
-    One pass: a value is never searched for placeholders again, so a scenario path that contains
-    ``{OUTPUT_DIR}`` (a folder ``in{OUTPUT_DIR}/``) runs as it is named. In the script of
-    ``sh -c SCRIPT`` (or bash, dash, zsh, ksh), values are inserted shell-quoted, so a file named
-    ``a;touch x;b.osc`` is one word to the shell and never runs as code; write the placeholder
-    unquoted there (``sh -c 'run {SCENARIO}'``). Every other argument is passed to the program as
-    it is (no shell is involved).
-    """
-    import shlex
-
-    values = {SCENARIO: scenario, OUTPUT_DIR: output_dir}
-    script = _shell_script_index(command)
-    result = []
-    for position, arg in enumerate(command):
-        if position == script:
-            result.append(_PLACEHOLDER.sub(lambda m: shlex.quote(values[m.group()]), arg))
-        else:
-            result.append(_PLACEHOLDER.sub(lambda m: values[m.group()], arg))
-    return result
-
-
-_PLACEHOLDER = re.compile(re.escape(SCENARIO) + "|" + re.escape(OUTPUT_DIR))
-
-
-def _shell_script_index(command: Sequence[str]) -> int | None:
-    """Where the script of ``sh -c SCRIPT`` (any option order, e.g. ``bash -ec``) stands, if it is one."""
-    if not command or os.path.basename(command[0]) not in SHELLS:
-        return None
-    start = 1
-    if os.path.basename(command[0]) == "busybox":
-        if len(command) < 2 or command[1] not in SHELLS:
-            return None
-        start = 2
-    for position in range(start, len(command)):
-        arg = command[position]
-        if arg == "--" or not arg.startswith("-"):
-            return None
-        if "c" in arg[1:] and not arg.startswith("--"):
-            return position + 1 if position + 1 < len(command) else None
-    return None

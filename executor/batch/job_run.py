@@ -17,7 +17,8 @@ from typing import BinaryIO
 
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
 from executor.batch.builtin_runner import BUILTIN_COMMAND
-from executor.batch.inputs import substitute
+from executor.batch.inputs import not_utf8_reason
+from executor.batch.launch_template import substitute
 from executor.batch.verdict import (
     FileMark,
     disk_full_result,
@@ -210,10 +211,15 @@ class JobRun:
         coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
         if not self.batch.command and self.launcher is None:
             raise OSError("the built-in runner is not available")
+        unusable = not_utf8_reason(self.scenario_path)
+        if unusable is not None:                  # said in the job's log too, where people look first
+            (self.output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
+            return launch_failure(self.output_dir, time.time(), time.time(), unusable)
         builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
-        argv = substitute(self.batch.command or builtin, self.scenario_path, str(self.output_dir))
-        child = ChildProcess(argv, str(self.output_dir / LOG_FILE), cwd=self.cwd, timeout=options.timeout,
-                             grace=options.grace, echo=self.echo, environment=self.environment,
+        launch = substitute(self.batch.command or builtin, self.scenario_path, str(self.output_dir))
+        child = ChildProcess(list(launch.argv), str(self.output_dir / LOG_FILE), cwd=self.cwd,
+                             timeout=options.timeout, grace=options.grace, echo=self.echo,
+                             environment={**self.environment, **dict(launch.environment)},
                              marker=job_marker(self.job.id, self.job.attempts),
                              launcher=None if self.batch.command else self.launcher, on_sent=self.pass_turn)
         if self.order is not None:

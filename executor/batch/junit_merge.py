@@ -25,7 +25,7 @@ from pathlib import Path
 
 from sqlalchemy import Engine
 
-from coverage_engine.files.sce_domains import HEADER_CHARS
+from coverage_engine.domains import HEADER_CHARS
 from coverage_engine.results.document import Case, document, suite_element
 from coverage_engine.results.names import declared_scenarios, drawn_units, scenario_classname, variant_name
 from coverage_engine.results.read import JunitUnreadable, read_cases
@@ -221,7 +221,17 @@ def job_cases(job: Job, names: JobNames, cases: list[Case], interrupted: str | N
     return cases
 
 
-def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | None = None):
+@dataclass(frozen=True)
+class JobNotes:
+    """What a job's testsuite says beyond the job itself: more properties (a repeated variant's attempts,
+    ``flaky``) and a text put first in each testcase's system-out."""
+
+    properties: Mapping[str, str]
+    stdout: str | None = None
+
+
+def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | None = None,
+              notes: JobNotes | None = None):
     """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped.
 
     A variant the store does not know (recorded in another store, or copied from elsewhere) is named
@@ -232,25 +242,32 @@ def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | N
         variant = _variant_from_file(job.scenario_path)
     reported = child_cases(job)
     cases = job_cases(job, job_names(job, variant), reported, interrupted)
+    properties = _properties(job, variant, reported)
+    if notes is not None:
+        properties.update(notes.properties)
+        if notes.stdout:
+            cases = [replace(case, stdout=notes.stdout + (f"\n\n{case.stdout}" if case.stdout else ""))
+                     for case in cases]
     return suite_element(job.name, cases, timestamp=iso_timestamp(job.started_at) if job.started_at else None,
-                         hostname=job.worker_host, file=job.scenario_path,
-                         properties=_properties(job, variant, reported))
+                         hostname=job.worker_host, file=job.scenario_path, properties=properties)
 
 
 def merged_report(jobs: Iterable[Job], variants: Mapping[str, VariantInfo] | None = None,
-                  *, interrupted: str | None = None) -> str:
+                  *, interrupted: str | None = None, notes: Mapping[str, JobNotes] | None = None) -> str:
     """The merged JUnit XML of the jobs that have a verdict, and of those a halt kept from running (as skipped).
 
     Without ``interrupted`` queued, running and cancelled jobs are left out (a report of a batch still in
     progress). With it (``Ctrl-C``, ``SIGTERM``: the report written when that stopped the batch) every job
     is in: one stopped while it ran is an error of type ``cancelled``, one not started is skipped.
+    ``notes``: by job name, what the job's suite says besides (:class:`JobNotes`).
     """
     variants = variants or {}
+    notes = notes or {}
     suites = []
     size = 0
     for job in jobs:
         if job.status not in FINAL and not halted(job) and interrupted is None:
             continue
-        suites.append(job_suite(job, variants.get(job.scenario_path), interrupted))
+        suites.append(job_suite(job, variants.get(job.scenario_path), interrupted, notes.get(job.name)))
         size += len(job.junit_xml or "") + min(len(job.log_tail or ""), REPORT_LOG_CHARS)
     return document(suites, indent=size < _PRETTY_LIMIT)

@@ -16,14 +16,16 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from coverage_engine.files.sce_domains import InputDomain, declared_text, header_domains
-from coverage_engine.results.atomic import write_text_atomically
+from coverage_engine.domains import InputDomain, declared_text, header_domains
+from coverage_engine.results.atomic import write_output, write_text_atomically
 from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
+from executor.batch.batch_outcome import BatchOutcome, batch_outcome
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
+from executor.batch.repeats import expand_specs
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
 from executor.children.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
@@ -116,7 +118,7 @@ def _discovered_specs(request: BatchRequest, mode: str) -> list[JobSpec]:
         print(f"warning: {name}: the file name is not UTF-8; its job fails (rename the file)", file=sys.stderr)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
-    return job_specs(files, request.shard)
+    return expand_specs(job_specs(files, request.shard), request.options.repeat)
 
 
 def _shard_options(request: BatchRequest) -> BatchOptions:
@@ -136,7 +138,8 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
     earlier = store.latest_batch(output_dir=output_dir)
     if earlier is None:
         raise NothingToResume(f"there is no batch for {output_dir} in the store {store.url}: nothing to rerun")
-    files = [Path(job.scenario_path) for job in folder_history.not_passed(store, earlier)]
+    files = list(dict.fromkeys(Path(job.scenario_path)                   # a repeated variant's attempts: once
+                               for job in folder_history.not_passed(store, earlier)))
     missing = [str(f) for f in files if not f.is_file()]
     if missing:
         raise BatchError(f"--rerun-failed: scenario file(s) gone since batch {earlier.id}: {', '.join(missing[:3])}")
@@ -144,7 +147,8 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
         return earlier, None
     batch = store.create_batch(mode="local", input_dir=earlier.input_dir, output_dir=output_dir,
                                host=socket.gethostname(), command=earlier.command,
-                               options=replace(earlier.options, continues=earlier.id), specs=job_specs(files))
+                               options=replace(earlier.options, continues=earlier.id),
+                               specs=expand_specs(job_specs(files), earlier.options.repeat))
     return earlier, batch
 
 
@@ -152,7 +156,8 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
 #: flags: the one definition of what ``--resume`` compares (the command line's parameters share these names).
 OPTION_FLAGS = {"timeout": "--timeout", "retries": "--retries", "post_run": "--post-run",
                 "ignore_return_value": "--ignore-process-return-value", "halt_on_failure": "--halt-on-failure",
-                "grace": "--grace", "shard": "--shard", "simulation": "--simulation"}
+                "grace": "--grace", "shard": "--shard", "simulation": "--simulation", "repeat": "--repeat",
+                "pass_rate": "--pass-rate"}
 
 
 def _shown(value: object) -> str:
@@ -238,6 +243,8 @@ class LocalRun:
     disk_full: str | None = None
     #: Why the merged report could not be written (a full disk), else None.
     report_error: str | None = None
+    #: The batch per variant (flaky ones, repeated attempts), when its report was written.
+    outcome: BatchOutcome | None = None
 
 
 #: How the merged report names a run that a full disk stopped.
@@ -262,12 +269,12 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     if summary.disk_full is not None and interrupted is None:
         interrupted = DISK_FULL_NAME
     try:
-        counts = write_batch_report(store, batch, Path(batch.output_dir) / RESULT_FILE, interrupted=interrupted)
+        outcome = write_outcome_report(store, batch, Path(batch.output_dir) / RESULT_FILE, interrupted=interrupted)
     except BatchError as exc:
         if summary.disk_full is None and not (exc.__cause__ and disk_full(exc.__cause__)):
             raise
         return LocalRun(store.counts(batch.id), signum, summary.disk_full or batch.output_dir, str(exc))
-    return LocalRun(counts, signum, summary.disk_full)
+    return LocalRun(outcome.counts, signum, summary.disk_full, outcome=outcome)
 
 
 def check_report_path(path: str | os.PathLike[str]) -> None:
@@ -284,23 +291,36 @@ def check_report_path(path: str | os.PathLike[str]) -> None:
 
 def write_batch_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
                        interrupted: str | None = None) -> dict[JobState, int]:
-    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts.
+    """Build the merged JUnit report of ``batch`` from the store and write it to ``path``; returns the counts
+    (of variants: with ``--repeat`` a variant's attempts count once).
 
     ``interrupted`` (``Ctrl-C``, ``SIGTERM``) says the batch was stopped: its unfinished jobs are in the
     report too, as errors (stopped while running) or skipped (not started). A batch that continues
     earlier ones (``--rerun-failed``, ``--only-new``) reports, and counts, the latest verdict of every
     job of the folder (:mod:`executor.batch.folder_history`).
     """
+    return write_outcome_report(store, batch, path, interrupted=interrupted).counts
+
+
+def write_outcome_report(store: QueueStore, batch: Batch, path: str | os.PathLike[str], *,
+                         interrupted: str | None = None) -> BatchOutcome:
+    """:func:`write_batch_report`, returning the batch per variant (:mod:`executor.batch.batch_outcome`);
+    a finished batch's figures are kept for ``scenario_coverage history`` (:mod:`executor.batch.history`)."""
     check_report_path(path)
-    listed = list(folder_history.latest_jobs(store, batch, results=False))
-    variants = variants_of(store.engine, [j.scenario_path for j in listed])
-    xml_text = merged_report(folder_history.latest_jobs(store, batch), variants, interrupted=interrupted)
+    outcome = batch_outcome(store, batch)
+    variants = variants_of(store.engine, [j.scenario_path for j in outcome.listed])
+    xml_text = merged_report(outcome.jobs, variants, interrupted=interrupted, notes=outcome.notes)
     try:
-        write_text_atomically(path, xml_text)
-        write_declared(Path(path).parent, variants.values())
+        write_output(path, xml_text)     # a device or FIFO is written in place, '-' is standard output
+        if str(path) != "-" and os.path.realpath(Path(path).parent) == os.path.realpath(batch.output_dir):
+            write_declared(Path(path).parent, variants.values())   # the batch's own results folder only
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
-    return folder_history.counts_of(listed)
+    if interrupted is None:
+        from executor.batch.history import record_batch_summary
+
+        record_batch_summary(store, batch, outcome)
+    return outcome
 
 
 def write_declared(folder: Path, variants: Iterable[VariantInfo]) -> None:
@@ -333,11 +353,17 @@ def exit_code(counts: dict[JobState, int], signum: int | None = None) -> int:
     return 0 if counts[JobState.PASSED] == total else EXIT_FAILED
 
 
-def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None) -> str:
-    """One line saying how the batch fared."""
+def summary_line(batch: Batch, counts: dict[JobState, int], report: str | None = None,
+                 outcome: BatchOutcome | None = None) -> str:
+    """One line saying how the batch fared (per variant, and its attempts' pass rate, with ``--repeat``)."""
     total = sum(counts.values())
     parts = [f"{counts[s]} {s.value}" for s in JobState if counts[s]]
-    text = f"batch {batch.id}: {total} job(s): " + ", ".join(parts or ["none"])
+    what = "job(s)" if batch.options.repeat <= 1 else f"variant(s) x {batch.options.repeat} attempts"
+    text = f"batch {batch.id}: {total} {what}: " + ", ".join(parts or ["none"])
+    if outcome is not None and batch.options.repeat > 1 and outcome.runs:
+        text += f"; {outcome.runs_passed} of {outcome.runs} attempt(s) passed ({100 * outcome.runs_passed / outcome.runs:.0f} %)"
+    if outcome is not None and outcome.flaky:
+        text += f"; {len(outcome.flaky)} flaky"
     if report:
         text += f"; report {report}"
     return text

@@ -1,50 +1,56 @@
-"""The worker loop: claim jobs, run each in a thread, heartbeat, sweep lost leases, record results.
+"""The worker: a loop that claims jobs, starts each in a thread, and hands its events to the parts.
 
-No SQL here: every database step is a verb of :class:`store.queue.QueueStore`. Only this loop's
-thread talks to the store; job threads report through a queue. Results wait in memory until the
-store accepts them (backing off while it is unreachable), so a finished result is never dropped
-because of a lost connection. The single-host run is this loop scoped to one batch.
+No SQL here and no policy of its own: each part has one job and is tested alone.
+
+* :mod:`executor.batch.claim_pacing`: when to claim (at once, or after the poll interval) and the
+  back-off while the store is unreachable;
+* :mod:`executor.batch.hand_over`: the built-in runner's fork server and how many jobs to hold;
+* :mod:`executor.batch.recorder`: the store writes of starts and results, several per transaction;
+* :mod:`executor.batch.leases`: heartbeats, and taking back the jobs of dead or silent holders;
+* :mod:`executor.batch.watchdog`: every process this worker starts dies with it, even after ``kill -9``.
+
+Only this loop's thread talks to the store; job threads report through a queue. A job's slot frees
+when the job ends; its result waits in the recorder until the store accepts it (backing off while
+the store is unreachable), so a finished result is never dropped because of a lost connection. The
+single-host run is this loop scoped to one batch.
 """
 
 from __future__ import annotations
 
-import functools
 import gc
 import hashlib
-import os
 import queue
 import threading
 import time
-from collections import Counter, deque
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, BinaryIO
+from typing import BinaryIO
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError, spare_cores
+from executor.batch.builtin_runner import ForkServerError
+from executor.batch.claim_pacing import ClaimPacer, StoreBackoff
+from executor.batch.hand_over import HandOver
 from executor.batch.job_folders import JobFolders
-from executor.batch.job_run import Done, JobRun, Started, StartOrder, job_marker
+from executor.batch.job_run import Done, JobRun, Started
+from executor.batch.leases import LeaseKeeper
 from executor.batch.progress import Reporter
-from executor.batch.verdict import DISK_FULL_REASON, disk_full_result, launch_failure
+from executor.batch.recorder import STARTED_RECORD_AFTER, RecorderHooks, ResultRecorder, WorkerSummary
+from executor.batch.repeats import attempt_environment
+from executor.batch.verdict import disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
-from executor.children.process import RUNNER_ENV, disk_full, end_orphan_group, process_alive
+from executor.children.process import RUNNER_ENV, disk_full
 from store.database import StoreError
-from store.jobs import Batch, Job, JobResult, Reclaimed, WorkerIdentity
-from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, LeaseLost, QueueStore, StoreUnavailable
-from store.states import RETRYABLE, JobState
+from store.jobs import Batch, Job, WorkerIdentity
+from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, QueueStore, StoreUnavailable
+from store.states import JobState
 
-if TYPE_CHECKING:
-    from store.coverage_records import CoverageRecords
+__all__ = ["STARTED_RECORD_AFTER", "Worker", "WorkerSettings", "WorkerSummary"]
 
 #: Longest wait between two looks at flags (Ctrl-C sets a flag; the loop notices within this time).
 _TICK = 0.2
 
 #: After a stop, how long to keep trying to write results to an unreachable store before giving up.
 _GIVE_UP_AFTER_STOP = 30.0
-
-#: Seconds a job's child runs before its process id is written to the store. A short job ends sooner:
-#: its result is then written alone (one transaction per job instead of two). The record serves to
-#: end the child of a runner that died together with its watchdog, which matters for long jobs.
-STARTED_RECORD_AFTER = 0.1
 
 
 @dataclass
@@ -64,51 +70,35 @@ class WorkerSettings:
     hand_over_ahead: bool = False        # the single-host run: built-in jobs go to the fork server ahead
 
 
-@dataclass
-class WorkerSummary:
-    """What a worker did: verdicts it recorded, whether it was stopped, whether there was any work."""
-
-    verdicts: Counter = field(default_factory=Counter)
-    interrupted: bool = False
-    nothing_to_do: bool = False
-    #: The output folder whose disk filled up (the worker stopped there), else None.
-    disk_full: str | None = None
-
-
 class Worker:
     """Run jobs from the queue until there is no work left (or :meth:`stop` is called)."""
 
     def __init__(self, store: QueueStore, settings: WorkerSettings, reporter: Reporter,
                  identity: WorkerIdentity | None = None) -> None:
         self.store = store
-        self._coverage_records: CoverageRecords | None = None
         self.settings = settings
         self.reporter = reporter
         self.identity = identity or WorkerIdentity.current()
         self.summary = WorkerSummary()
-        self._events: queue.Queue = queue.Queue()
-        self._runs: dict[int, JobRun] = {}
-        self._pending: deque = deque()         # store writes not done yet: Started / Done events
+        self.backoff = StoreBackoff(reporter.warn)
+        self.pacer = ClaimPacer(settings.poll)
+        self.leases = LeaseKeeper(store, self.identity, lease=settings.lease, max_lost=settings.max_lost,
+                                  batch_id=settings.batch_id)
+        self.hand_over = HandOver(self.identity.id, settings.slots, ahead_allowed=settings.hand_over_ahead
+                                  and settings.batch_id is not None)
+        self.recorder = ResultRecorder(store, reporter, self.backoff, RecorderHooks(
+            stop=self.stop, requeued=self.pacer.wake, halted=lambda _batch: self.pacer.idle(),
+            stopping=self._stop_is_set), self.summary, at_once=settings.slots == 1)
+        self._events: queue.Queue[Started | Done] = queue.Queue()
+        self._runs: dict[int, JobRun] = {}             # jobs started and not ended
         self._batches: dict[int, Batch] = {}
-        self._halted: set[int] = set()
-        self._to_halt: set[int] = set()
         self._stop = threading.Event()
         self._force = threading.Event()
         self._cancelling = False
-        self._claim_more = True
-        self._next_claim = 0.0
-        self._backoff = 0.0
-        self._retry_at = 0.0
-        self._warned_unavailable = False
         self._started = 0
-        self._unsure_claims = False
-        self._fork_server: ForkServer | None = None
-        self._watchdog: Watchdog | None = None        # set while run() runs
-        self._ahead: int | None = None                # jobs held ready beyond the slots (see _capacity)
-        self._shown_running: set[int] = set()         # jobs the display counts as running
-        self._start_order = StartOrder()              # jobs hand their starts over in claim order
+        self._unsure_claims = False                    # a claim may have committed unheard: heartbeat soon
+        self._shown_running: set[int] = set()          # jobs the display counts as running
         self._folders = JobFolders()
-        self._started_due: float | None = None   # when the oldest held start record is to be written
 
     # ------------------------------------------------------------------ control
     def stop(self, force: bool = False) -> None:
@@ -117,6 +107,9 @@ class Worker:
         if force:
             self._force.set()
 
+    def _stop_is_set(self) -> bool:
+        return self._stop.is_set()
+
     def run(self) -> WorkerSummary:
         """The loop; returns when no work is left, or after a stop once every running job has ended.
 
@@ -124,7 +117,8 @@ class Worker:
         jobs stay ``running`` until the lease expires or ``--resume`` finds this runner gone). Should
         this process die (``kill -9``), its watchdog ends every process it started.
         """
-        self._watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
+        watchdog = Watchdog(self.mark).start() if self.settings.watchdog else None
+        self.hand_over.on_scratch = watchdog.remove_on_death if watchdog else None
         gc.collect()
         gc.freeze()      # what exists now (imports, the batch) is not scanned while the loop runs
         try:
@@ -137,125 +131,71 @@ class Worker:
             raise
         finally:
             gc.unfreeze()                        # a later loop in this process freezes afresh
-            if self._fork_server is not None:
-                self._fork_server.close()
-                self._fork_server = None
-            if self._watchdog is not None:
-                self._watchdog.release()
-                self._watchdog = None
+            self.hand_over.close()
+            if watchdog is not None:
+                watchdog.release()
 
     @property
     def mark(self) -> str:
         """``RUNNER_ENV=<worker id>``: the environment entry of every process this worker starts."""
         return f"{RUNNER_ENV}={self.identity.id}"
 
-    def _launcher(self) -> ForkServer:
-        """The built-in runner's fork server, started on the first job that needs it (again if it ended)."""
-        if self._fork_server is None or not self._fork_server.alive:
-            if self._fork_server is not None:
-                self._fork_server.close()
-                self._fork_server = None
-            self._fork_server = ForkServer({**os.environ, RUNNER_ENV: self.identity.id},
-                                           keep_spare=spare_cores(self.settings.slots), limit=self.settings.slots,
-                                           on_scratch=self._watchdog.remove_on_death if self._watchdog else None,
-                                           ).start()
-        return self._fork_server
-
     def _loop(self) -> WorkerSummary:
-        beat_every = max(0.05, self.settings.lease / 4)
         next_beat = next_sweep = 0.0
         stopped_at: float | None = None
         while True:
             now = time.monotonic()
-            if now >= self._retry_at:
-                self._flush()
+            ready = self.backoff.ready(now)
+            if ready:
+                self.recorder.flush(now, force=self._stop.is_set())
             if self._stop.is_set():
                 self._cancel_all()
                 stopped_at = stopped_at or now
-                if not self._runs and self._pending and now - stopped_at > _GIVE_UP_AFTER_STOP:
-                    self.reporter.warn(f"{len(self._pending)} result(s) could not be written to the store")
-                    self._pending.clear()
-            if now >= self._retry_at and now >= next_sweep:
-                if self._guard(self._sweep):
-                    next_sweep = now + beat_every
-            if (self._runs or self._unsure_claims) and now >= self._retry_at and \
-                    (now >= next_beat or self._unsure_claims):
-                if self._guard(self._heartbeat):
-                    next_beat = now + beat_every
+                if not self._runs and self.recorder and now - stopped_at > _GIVE_UP_AFTER_STOP:
+                    self.reporter.warn(f"{self.recorder.drop()} result(s) could not be written to the store")
+            if ready and now >= next_sweep and self._store_step(self._sweep):
+                next_sweep = now + self.leases.every
+            if ready and (self._runs or self.recorder or self._unsure_claims) \
+                    and (now >= next_beat or self._unsure_claims) and self._store_step(self._heartbeat):
+                next_beat = now + self.leases.every
             if self._may_claim(now):
-                self._guard(self._claim)
-            if not self._runs and not self._pending:
+                self._store_step(self._claim)
+            if not self._runs and not self.recorder:
                 if self._stop.is_set():
                     self.summary.interrupted = True
                     break
-                if time.monotonic() >= self._retry_at and not self._claim_more:
-                    remaining = self._guard(self._remaining)
-                    if remaining == 0 and not self.settings.wait_for_work:
+                if self.backoff.ready(time.monotonic()) and not self.pacer.eager:
+                    ok, remaining = self.backoff.run(self._remaining)
+                    if ok and remaining == 0 and not self.settings.wait_for_work:
                         self.summary.nothing_to_do = self._started == 0
                         break
             self._wait_for_event()
         return self.summary
 
-    # ------------------------------------------------------------------ steps
-    def _guard(self, step):
-        """Run a store step; while the store is unreachable, back off (0.5 s doubling to 30 s) and say so once."""
-        try:
-            value = step()
-        except StoreUnavailable as exc:
-            self._backoff = min(30.0, max(0.5, self._backoff * 2))
-            self._retry_at = time.monotonic() + self._backoff
-            if not self._warned_unavailable:
-                self.reporter.warn(f"{exc}; retrying (results are kept until written)")
-                self._warned_unavailable = True
-            return None
-        if self._backoff:
-            self._backoff = 0.0
-            self._warned_unavailable = False
-        return True if value is None else value
+    def _store_step(self, step: Callable[[], None]) -> bool:
+        """Run a store step under the back-off; whether the store took it."""
+        return self.backoff.run(step)[0]
 
-    def _capacity(self) -> int:
-        """How many jobs this worker holds at once: its slots, and in a batch of the built-in runner as
-        many again, handed to the fork server ahead: it holds each until a slot is free and starts it
-        the moment a job ends, so no slot waits while this loop records a result and claims the next
-        job (measured, 1,000 trivial jobs at -j 2: 1.36 slots busy on average without). Launched
-        commands, a ``worker`` (jobs it holds ahead would wait behind its busy slots while other hosts
-        idle), ``--halt-on-failure`` (a job handed ahead would start before the failure is known) and
-        ``--post-run`` (the next job would start while the last one's hooks still run) hold no more
-        than their slots."""
-        if self._ahead is None:
-            batch_id = self.settings.batch_id
-            if batch_id is None or not self.settings.hand_over_ahead:
-                self._ahead = 0
-            else:
-                batch = self._batch(batch_id)
-                options = batch.options
-                ahead = not batch.command and not options.halt_on_failure and not options.post_run
-                self._ahead = self.settings.slots if ahead else 0
-        return self._holding()
-
-    def _holding(self) -> int:
-        """The jobs this worker may hold now (its slots until the first claim has decided on more)."""
-        return self.settings.slots + (self._ahead or 0)
-
+    # ------------------------------------------------------------------ claiming and starting
     def _may_claim(self, now: float) -> bool:
-        free = self._holding() - len(self._runs)
-        if self._stop.is_set() or free <= 0 or now < self._retry_at:
+        free = self.hand_over.holding() - len(self._runs)
+        if self._stop.is_set() or free <= 0 or not self.backoff.ready(now):
             return False
-        if self.settings.batch_id is not None and self.settings.batch_id in self._halted:
+        if self.settings.batch_id is not None and self.recorder.halted(self.settings.batch_id):
             return False
-        return self._claim_more or now >= self._next_claim
+        return self.pacer.due(now)
 
     def _claim(self) -> None:
-        free = self._capacity() - len(self._runs)
+        holding = self.hand_over.holding() if self.settings.batch_id is None else \
+            self.hand_over.decide(self._batch(self.settings.batch_id))
+        free = holding - len(self._runs)
         try:
             jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
                                     shared_only=self.settings.batch_id is None, lease=self.settings.lease)
         except StoreUnavailable:
             self._unsure_claims = True      # the claim may have committed without us hearing back
             raise
-        self._claim_more = len(jobs) == free
-        if not self._claim_more:
-            self._next_claim = time.monotonic() + self.settings.poll
+        self.pacer.claimed(free, len(jobs))
         for index, job in enumerate(jobs):
             try:
                 self._start(job)
@@ -302,13 +242,15 @@ class Worker:
         launcher = None
         if problem is None and not batch.command:
             try:
-                launcher = self._launcher()
+                launcher = self.hand_over.launcher()
             except ForkServerError as exc:
                 problem = str(exc)
+        order = self.hand_over.order
         run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
                      echo=self.settings.echo if self.settings.slots == 1 else None,
-                     environment={RUNNER_ENV: self.identity.id}, launcher=launcher, made_folder=made_folder,
-                     order=(self._start_order, self._start_order.take()))
+                     environment={RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)},
+                     launcher=launcher, made_folder=made_folder,
+                     order=(order, order.take()))
         self._runs[job.id] = run
         self._started += 1
         if problem is None:
@@ -340,35 +282,22 @@ class Worker:
         copy.write_text(text, encoding="utf-8")
         return str(copy)
 
+    # ------------------------------------------------------------------ leases
     def _heartbeat(self) -> None:
-        held = self.store.heartbeat(self.identity, self.settings.lease)
-        phantoms = held - set(self._runs)
-        if phantoms:                          # claimed, but the reply never reached us: give them back
-            self.store.release(self.identity, phantoms)
+        """Extend the leases of the jobs running and of those whose result waits; stop the lost ones."""
+        waiting = self.recorder.unwritten()
+        lost = self.leases.heartbeat({*self._runs, *waiting})
         self._unsure_claims = False
-        for job_id, run in self._runs.items():
-            if job_id not in held and not run.lost:
+        for job_id in sorted(lost):
+            run = self._runs.get(job_id) or waiting.get(job_id)
+            if run is not None and not run.lost:
                 run.lost = True
                 self.reporter.warn(f"lost the lease on {run.job.name}; stopping it, another worker runs it")
                 run.cancel(grace=0)
 
     def _sweep(self) -> None:
-        """Take back jobs of dead holders on this host at once, and of any holder whose lease expired."""
-        reclaimed: list[Reclaimed] = []
-        dead = {j.worker_id for j in self.store.running(self.settings.batch_id,
-                                                        shared_only=self.settings.batch_id is None)
-                if self.identity.same_node(j.worker_id) and j.worker_id != self.identity.id
-                and not process_alive(j.worker_pid)}
-        for worker_id in sorted(w for w in dead if w):
-            reclaimed += self.store.reclaim_worker(worker_id, "the runner holding it ended without a result",
-                                                   max_lost=self.settings.max_lost)
-        reclaimed += self.store.reclaim_expired(self.settings.max_lost)
-        for item in reclaimed:
-            if item.child_pid and self.identity.same_node(item.worker_id) and item.worker_id != self.identity.id:
-                # the orphaned child of a dead runner must not run on (if that group is still it)
-                end_orphan_group(item.child_pid, job_marker(item.job_id, item.attempt), item.worker_id)
-        if reclaimed:
-            self._claim_more = True
+        if self.leases.sweep():
+            self.pacer.wake()
 
     def _remaining(self) -> int:
         counts = self.store.counts(self.settings.batch_id, shared_only=self.settings.batch_id is None)
@@ -385,15 +314,16 @@ class Worker:
             for run in reversed(list(self._runs.values())):
                 run.cancel()
 
-    # ------------------------------------------------------------------ events and writes
+    # ------------------------------------------------------------------ events
     def _wait_for_event(self) -> None:
+        now = time.monotonic()
         timeout = _TICK
-        if self._claim_more and not self._stop.is_set() and len(self._runs) < self._holding() \
-                and time.monotonic() >= self._retry_at:
+        if self.pacer.eager and not self._stop.is_set() and len(self._runs) < self.hand_over.holding() \
+                and self.backoff.ready(now):
             timeout = 0.0
-        if self._started_due is not None:         # wake when a held start record is due (and may be written)
-            due = max(self._started_due, self._retry_at)
-            timeout = max(0.0, min(timeout, due - time.monotonic()))
+        due = self.recorder.due()
+        if due is not None:                       # wake when a held write is due (and may be written)
+            timeout = max(0.0, min(timeout, max(due, self.backoff.retry_at) - now))
         try:
             event = self._events.get(timeout=timeout) if timeout else self._events.get_nowait()
         except queue.Empty:
@@ -406,100 +336,15 @@ class Worker:
                 break
 
     def _add(self, event: Started | Done) -> None:
-        """Queue a store write; a job's result makes the not yet written record of its start pointless.
+        """A start or an end: shown, and handed to the recorder; an ended job leaves its slot.
 
         The display counts a job as running from its start (a job handed to the fork server ahead
         waits for a slot), or from its result when it never started."""
-        if isinstance(event, Started) or event.run.job.id not in self._shown_running:
-            self._shown_running.add(event.run.job.id)
-            self.reporter.job_started(event.run.job)
-        if isinstance(event, Done) and any(isinstance(e, Started) and e.run is event.run for e in self._pending):
-            self._pending = deque(e for e in self._pending if not (isinstance(e, Started) and e.run is event.run))
-        self._pending.append(event)
-
-    def _flush(self) -> None:
-        held: list[Started] = []                # starts too recent to record yet (see STARTED_RECORD_AFTER)
-        now = time.monotonic()
-        try:
-            while self._pending:
-                event = self._pending[0]
-                if isinstance(event, Started) and now - event.at < STARTED_RECORD_AFTER \
-                        and not self._stop.is_set():
-                    held.append(self._pending.popleft())
-                    continue
-                if self._guard(functools.partial(self._write, event)) is None:
-                    return
-                self._pending.popleft()
-        finally:
-            self._pending.extendleft(reversed(held))
-            self._started_due = min(e.at for e in held) + STARTED_RECORD_AFTER if held else None
-        while self._to_halt:
-            batch_id = min(self._to_halt)
-            if self._guard(functools.partial(self._halt, batch_id)) is None:
-                return
-            self._to_halt.discard(batch_id)
-
-    def _write(self, event: Started | Done) -> None:
-        run = event.run
-        if isinstance(event, Started):
-            if not run.lost:
-                self.store.started(run.job, event.pid)
-            return
-        for problem in event.problems:
-            self.reporter.warn(f"{run.job.name}: {problem}")
-        event.problems = []                    # said once, even if the write below has to be repeated
-        if run.lost:
-            self._runs.pop(run.job.id, None)
-            return
-        result, job = event.result, run.job
-        retrying = False
-        if result.reason == DISK_FULL_REASON and self.summary.disk_full is None:
-            self.summary.disk_full = str(run.output_dir.parent)
-            self.reporter.warn(f"no space left on the device holding {run.output_dir.parent}: stopping (the jobs "
-                               "under way are stopped; make room, then finish with --resume)")
-            self.stop()
-        try:
-            if result.status is JobState.CANCELLED:
-                self.store.cancel(job, result)
-            elif (result.status in RETRYABLE and job.retried < run.batch.options.retries
-                  and not self._stop.is_set()):
-                self.store.retry(job, result)
-                retrying = self._claim_more = True
-            else:
-                self.store.finish(job, result)
-                self._record_coverage(job, result)
-                self.summary.verdicts[result.status] += 1
-                if result.status is not JobState.PASSED and run.batch.options.halt_on_failure:
-                    self._to_halt.add(run.batch.id)
-        except LeaseLost as exc:
-            self.reporter.warn(f"result of {job.name} refused: {exc}")
+        job = event.run.job
+        if isinstance(event, Started) or job.id not in self._shown_running:
+            self._shown_running.add(job.id)
+            self.reporter.job_started(job)
+        if isinstance(event, Done):
             self._runs.pop(job.id, None)
-            return
-        self._runs.pop(job.id, None)           # the slot frees only once the result is in the store
-        self._shown_running.discard(job.id)
-        self.reporter.job_finished(job, result, retrying=retrying)
-
-    def _record_coverage(self, job: Job, result: JobResult) -> None:
-        """Keep the job's ``coverage.json`` (read on this host with its result) in the store, for reports
-        from any host; a file that does not validate is said and left out (the job's verdict stands)."""
-        if not result.coverage_json:
-            return
-        from coverage_engine.coverage.errors import RunFileError
-        from coverage_engine.coverage.run_file import parse_run_coverage, run_coverage_dict
-        from store.coverage_records import CoverageRecords
-
-        try:
-            if self._coverage_records is None:
-                self._coverage_records = CoverageRecords.attach(self.store.engine)
-            run = parse_run_coverage(result.coverage_json)
-            self._coverage_records.record(job.id, job.attempts, run_coverage_dict(run))
-        except RunFileError as exc:
-            self.reporter.warn(f"{job.name}: coverage.json not kept: {exc.render()}")
-
-    def _halt(self, batch_id: int) -> None:
-        if batch_id not in self._halted:
-            count = self.store.halt(batch_id)
-            self._halted.add(batch_id)
-            self._claim_more = False
-            if count:
-                self.reporter.warn(f"halting: {count} job(s) not started (--halt-on-failure)")
+            self._shown_running.discard(job.id)
+        self.recorder.add(event, time.monotonic())

@@ -12,6 +12,10 @@ import os
 import sys
 from typing import TextIO
 
+from coverage_engine.printable import printable
+
+__all__ = ["printable", "wants_rich"]
+
 
 def wants_rich(stream: TextIO | None = None) -> bool:
     """Whether ``stream`` (default stdout) gets rich output."""
@@ -22,19 +26,3 @@ def wants_rich(stream: TextIO | None = None) -> bool:
         return stream.isatty()
     except (AttributeError, ValueError):
         return False
-
-
-def printable(text: str) -> str:
-    """``text`` safe to print on a terminal: control characters (ESC, bell, carriage return…) and bytes
-    that are not UTF-8 (kept by the file system as surrogates) are shown as escapes, never sent raw."""
-    if text.isprintable():
-        return text
-    out = []
-    for char in text:
-        if char.isprintable() and not 0xDC80 <= ord(char) <= 0xDCFF:
-            out.append(char)
-        elif 0xDC80 <= ord(char) <= 0xDCFF:
-            out.append(f"\\x{ord(char) - 0xDC00:02x}")
-        else:
-            out.append(char.encode("unicode_escape").decode("ascii"))
-    return "".join(out)

@@ -265,7 +265,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
             live.close()
 
     if report is not None:  # what the last update did not see (the aborted and skipped scenarios)
-        for path in report.update(outcome.results):
+        for path in report.update(outcome.results, final=True):
             logger.debug(f"wrote {path}")
     if outcome.aborted:
         if request.post_run:

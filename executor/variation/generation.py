@@ -148,12 +148,16 @@ def run(request: VariationRequest) -> int:
                     hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
                          f"{wanted} (one .sce file each, about {report.size_text(wanted * SCE_FILE_BYTES)} "
                          "on disk)")
+            if covering and options.t <= len(plan.sizes):   # (a strength beyond the dimensions is said later)
+                strategies.refuse_oversized(plan, options, limit)    # before 2,000 values are checked
             check_plan(plan, exclude=not covering)
             if strategies.enough_samples(plan, options, draw):
                 break
             draw *= 2
         seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
-        tuples = strategies.build_covering_array(plan, options, seeds) if covering else None
+        tuples = strategies.build_covering_array(plan, options, seeds, limit=limit,
+                                                 tick=report.Ticker("building the covering array")) \
+            if covering else None
         plan.strategy_note = strategies.describe_options(options)
         plan.design_samples = options.samples
         report.describe(plan)

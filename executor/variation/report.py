@@ -12,6 +12,7 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
+from coverage_engine.printable import printable_lines
 from executor.output.terminal import wants_rich
 
 if TYPE_CHECKING:
@@ -22,8 +23,9 @@ RICH_PROGRESS_FROM = 2000
 
 
 def echo(message: str = "", err: bool = False) -> None:
-    """One line on stdout (``err``: stderr), flushed so it interleaves with the other stream."""
-    print(message, file=sys.stderr if err else sys.stdout, flush=True)
+    """One line on stdout (``err``: stderr), flushed so it interleaves with the other stream; names and
+    values in it came from files, so control characters are escaped (:func:`printable_lines`)."""
+    print(printable_lines(message), file=sys.stderr if err else sys.stdout, flush=True)
 
 
 def size_text(n: float) -> str:
@@ -144,6 +146,23 @@ def list_assignments(plan: VariationPlan) -> int:
             echo(f"{stem}{index}: {assignment} (skipped: does not resolve)")
     echo(f"{plan.total - skipped} variants would be generated" + (f", {skipped} skipped" if skipped else ""))
     return 1 if skipped else 0
+
+
+class Ticker:
+    """Progress of a long computation before anything is written (a covering array): a plain line on
+    stderr every :data:`Progress.PLAIN_EVERY` seconds, nothing when it is quick."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self._started = time.monotonic()
+        self._next = self._started + Progress.PLAIN_EVERY
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.monotonic()
+        if now < self._next or not total:
+            return
+        self._next = now + Progress.PLAIN_EVERY
+        echo(f"... {self.what}: {done * 100 / total:.0f} % after {duration_text(now - self._started)}", err=True)
 
 
 class Progress:

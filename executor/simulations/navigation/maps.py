@@ -115,7 +115,7 @@ def load_map(path: Path) -> OccupancyMap:
     if path.stat().st_size > MAX_MAP_YAML_BYTES:
         raise MapError(f"{path}: larger than {MAX_MAP_YAML_BYTES} bytes")
     try:
-        spec = load_bounded(path.read_text(encoding="utf-8"), yaml.SafeLoader)
+        spec = load_bounded(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError, YamlLimitError) as exc:
         raise MapError(f"{path}: not YAML: {exc}") from None
     if not isinstance(spec, dict):

@@ -1,0 +1,215 @@
+"""Is the batch process the bottleneck? Its own CPU per job, launched mode against xargs, jobs/s per -j (issue 34).
+
+Three figures, each for this tree and (with ``--baseline DIR``) for an older source tree run by the
+same interpreter, side by side in one run:
+
+1. **The batch process's own CPU per job**: ``scenario_batch_execution -j 2`` with the built-in runner
+   over ``--variants`` trivial variants (``scenario_variation`` of a tutorial-style file: a serial
+   ``log()`` and ``emit end``). "Own" is the utime + stime of every thread of that one process,
+   children excluded (the fork server, the jobs it forks, the watchdog): read from
+   ``/proc/<pid>/stat`` (fields 14 and 15) after the process has exited but before it is reaped
+   (``waitid(..., WEXITED | WNOWAIT)``), so nothing of its last moments is missed and nothing of its
+   children (which ``wait4``'s rusage would add) is counted. Start-up and the merged report are in
+   it (divided over the jobs). Goal: <= 0.5 ms per job.
+2. **Launched mode against xargs**: ``--launched`` jobs whose command is a shell writing a one-testcase
+   ``test.xml``, ``-j 2``, against ``xargs -P 2`` running one shell per job that does the same work our
+   runner asks for (make the job's folder, send its output to ``log.txt``, write ``test.xml``). Goal:
+   ours <= 1.3x xargs (wall time).
+3. **Throughput per -j**: jobs/s of the built-in runner over ``--throughput`` variants with -j 1, 2, 4, …
+   up to the CPUs this process may use.
+
+Every run writes into a fresh folder with a copy of the variation's store (a store that grows
+run after run would tilt the comparison). Runs of this tree and the baseline alternate.
+
+The baseline tree is a plain source tree of an older commit, e.g.::
+
+    git archive f0e4cc8 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
+    .venv/bin/python benchmarks/bench_batch_process.py --baseline /tmp/base
+
+(its packages are put first on ``PYTHONPATH``; the console scripts and the interpreter are this venv's).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+BIN = Path(sys.executable).parent
+HERE = Path(__file__).resolve().parent.parent
+
+#: The launched child: a shell writing a one-testcase test.xml into its output folder.
+CHILD = 'echo "<testsuite><testcase name=\\"t\\"/></testsuite>" > "$2/test.xml"'
+
+#: What xargs runs per job: the same shell, also doing what our runner does for it (folder and log).
+XARGS_CHILD = 'mkdir -p "$2" && exec > "$2/log.txt" 2>&1; ' + CHILD
+
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
+
+
+@dataclass(frozen=True)
+class Tree:
+    """A source tree to measure: its label and the PYTHONPATH that selects it (None: the installed one)."""
+
+    label: str
+    path: str | None
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One run: wall seconds and the own CPU seconds of the measured process (children excluded)."""
+
+    wall: float
+    cpu: float
+
+
+def own_cpu_at_exit(proc: subprocess.Popen) -> float:
+    """utime + stime of ``proc`` (all its threads, not its children) once it has exited; then reap it."""
+    os.waitid(os.P_PID, proc.pid, os.WEXITED | os.WNOWAIT)
+    with open(f"/proc/{proc.pid}/stat", "rb") as handle:
+        fields = handle.read().rsplit(b")", 1)[1].split()
+    proc.wait()
+    return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS   # fields 14 and 15 of stat(5)
+
+
+def run(argv: Sequence[str], cwd: Path, env: dict[str, str]) -> Measured:
+    """Run ``argv`` with output to /dev/null (as in CI: no terminal); fail loudly on a bad exit."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as errors:
+        proc = subprocess.Popen(list(argv), cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=errors)
+        cpu = own_cpu_at_exit(proc)
+        wall = time.perf_counter() - start
+        if proc.returncode != 0:
+            errors.seek(0)
+            raise SystemExit(f"{argv[0]} failed ({proc.returncode}): {errors.read()[-2000:].decode(errors='replace')}")
+    return Measured(wall, cpu)
+
+
+def environment(tree: Tree) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("SCENARIO_STORE", "PYTHONPATH")}
+    env["NO_COLOR"] = "1"
+    if tree.path is not None:
+        env["PYTHONPATH"] = tree.path
+    return env
+
+
+def variants(work: Path, count: int) -> Path:
+    """``count`` trivial variants in ``work/variants`` (and their store, ``work/store.db``)."""
+    work.mkdir(parents=True, exist_ok=True)
+    values = ", ".join(f'"m{i}"' for i in range(count))
+    (work / "bench.osc").write_text("import osc.helpers\n\nscenario bench:\n    do serial:\n"
+                                    f"        log() with:\n            keep(it.msg in [{values}])\n"
+                                    "        emit end\n")
+    env = environment(Tree("this", None))
+    run([str(BIN / "scenario_variation"), "bench.osc", "-o", "variants", "--store",
+         f"sqlite:///{work / 'store.db'}"], work, env)
+    return work
+
+
+def batch(source: Path, run_dir: Path, tree: Tree, slots: int, command: Sequence[str] = ()) -> Measured:
+    """``scenario_batch_execution -i variants -o results -j slots [-- command]`` in a fresh folder."""
+    run_dir.mkdir(parents=True)
+    shutil.copy(source / "store.db", run_dir / "store.db")
+    argv = [str(BIN / "scenario_batch_execution"), "-i", str(source / "variants"), "-o", "results", "-j",
+            str(slots), "--store", f"sqlite:///{run_dir / 'store.db'}"]
+    if command:
+        argv += ["--", *command]
+    measured = run(argv, run_dir, environment(tree))
+    if not (run_dir / "results" / "test.xml").is_file():
+        raise SystemExit(f"no merged report in {run_dir}")
+    return measured
+
+
+def xargs(source: Path, run_dir: Path) -> float:
+    """Wall seconds of ``xargs -P 2`` running :data:`XARGS_CHILD` once per scenario file."""
+    run_dir.mkdir(parents=True)
+    files = sorted((source / "variants").glob("*.sce"))
+    pairs = "".join(f"{f}\n{run_dir / 'results' / f.stem}\n" for f in files).encode()
+    start = time.perf_counter()
+    subprocess.run(["xargs", "-d", "\n", "-P", "2", "-n", "2", "sh", "-c", XARGS_CHILD, "sh"], input=pairs,
+                   check=True, cwd=run_dir)
+    return time.perf_counter() - start
+
+
+def slot_counts(cpus: int) -> list[int]:
+    """1, 2, 4, … and the CPU count itself."""
+    counts, n = [], 1
+    while n < cpus:
+        counts.append(n)
+        n *= 2
+    return [*counts, cpus]
+
+
+def usable_cpus() -> int:
+    return len(os.sched_getaffinity(0))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--baseline", help="a source tree of an older commit to measure side by side")
+    parser.add_argument("--variants", type=int, default=2000, help="built-in jobs for the CPU figure")
+    parser.add_argument("--launched", type=int, default=500, help="launched jobs against xargs")
+    parser.add_argument("--throughput", type=int, default=500, help="built-in jobs per -j for jobs/s")
+    parser.add_argument("--rounds", type=int, default=1, help="runs of each; the best is reported")
+    args = parser.parse_args()
+    trees = [Tree("this tree", None)]
+    if args.baseline:
+        trees.insert(0, Tree(f"baseline {args.baseline}", str(Path(args.baseline).resolve())))
+    cpus = usable_cpus()
+    print(f"{cpus} usable CPUs; load average {os.getloadavg()[0]:.2f} at start", flush=True)
+    failures = 0
+    with tempfile.TemporaryDirectory(prefix="bench_batch_process_") as tmp:
+        root = Path(tmp)
+        big, launched, small = (variants(root / name, n) for name, n in
+                                (("big", args.variants), ("launched", args.launched), ("small", args.throughput)))
+        best: dict[tuple[str, str], Measured] = {}
+
+        def keep(key: tuple[str, str], measured: Measured) -> None:
+            if key not in best or measured.wall < best[key].wall:
+                best[key] = measured
+
+        for round_ in range(args.rounds):
+            for index, tree in enumerate(trees):
+                tag = f"{round_}_{index}"
+                keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, 2))
+                keep((tree.label, "launched"), batch(launched, root / f"launched_{tag}", tree, 2,
+                                                     ("sh", "-c", CHILD, "sh", "{SCENARIO}", "{OUTPUT_DIR}")))
+                for slots in slot_counts(cpus):
+                    keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots))
+            wall = xargs(launched, root / f"xargs_{round_}")
+            keep(("xargs", "launched"), Measured(wall, 0.0))
+        print(f"\n{'':<28}" + "".join(f"{t.label[:34]:>36}" for t in trees))
+        cells = [f"{best[(t.label, 'cpu')].cpu / args.variants * 1000:.2f} ms "
+                 f"({best[(t.label, 'cpu')].cpu:.2f} s, wall {best[(t.label, 'cpu')].wall:.1f} s)" for t in trees]
+        print(f"{'batch CPU/job, built-in -j2':<28}" + "".join(f"{c:>36}" for c in cells))
+        xargs_wall = best[("xargs", "launched")].wall
+        cells = [f"{best[(t.label, 'launched')].wall:.2f} s = {best[(t.label, 'launched')].wall / xargs_wall:.2f}x"
+                 for t in trees]
+        print(f"{f'launched {args.launched} jobs -j2':<28}" + "".join(f"{c:>36}" for c in cells)
+              + f"   (xargs -P 2: {xargs_wall:.2f} s)")
+        for slots in slot_counts(cpus):
+            cells = []
+            for t in trees:
+                rate = args.throughput / best[(t.label, f"j{slots}")].wall
+                one = args.throughput / best[(t.label, "j1")].wall
+                cells.append(f"{rate:.0f} jobs/s ({rate / one:.2f}x -j1)")
+            print(f"{f'built-in -j{slots}, {args.throughput} jobs':<28}" + "".join(f"{c:>36}" for c in cells))
+        mine = trees[-1].label
+        per_job = best[(mine, "cpu")].cpu / args.variants * 1000
+        ratio = best[(mine, "launched")].wall / xargs_wall
+        print(f"\ngoals for {mine}: batch CPU/job {per_job:.2f} ms (<= 0.5: {'met' if per_job <= 0.5 else 'MISSED'}); "
+              f"launched/xargs {ratio:.2f}x (<= 1.3: {'met' if ratio <= 1.3 else 'MISSED'})")
+        failures += per_job > 0.5
+        failures += ratio > 1.3
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

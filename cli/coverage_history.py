@@ -118,7 +118,8 @@ def with_history(report: CoverageReport, results: tuple[str, ...], store_url: st
     if store_url is not None or not results:
         from executor.batch.history import store_extras
 
-        extra = store_extras(store_url, results[0] if results else None, batch_id, trend=trend)
+        extra = store_extras(store_url, results[0] if results else None, batch_id, trend=trend,
+                             graded=(report.grade, report.holes_count()))
     elif len(results) == 1 and os.path.isdir(results[0]):
         from coverage_engine.coverage.diff import folder_outcomes
         from coverage_engine.coverage.trend import read_history_file

@@ -25,6 +25,25 @@ class OutcomeCount(NamedTuple):
     total: int
 
 
+def ran_before(engine: Engine, batch_id: int) -> bool:
+    """Whether a batch before ``batch_id`` ran (to a verdict) any scenario content that batch runs: without
+    one, and without repeats, no variant of the batch can be flaky (one statement, stops at the first)."""
+    finals = [state.value for state in FINAL]
+    contents = select(jobs.c.scenario_sha).where(jobs.c.batch_id == batch_id).scalar_subquery()
+    stmt = (select(jobs.c.id).where(jobs.c.scenario_sha.in_(contents), jobs.c.status.in_(finals),
+                                    jobs.c.batch_id < batch_id).limit(1))
+    with engine.connect() as conn:
+        return conn.execute(stmt).first() is not None
+
+
+def variant_keys(engine: Engine, batch_id: int) -> set[tuple[str, str]]:
+    """The (name, content) of every job of a batch: what identifies its variants, read without the rest
+    of each job's row."""
+    with engine.connect() as conn:
+        return {(row[0], row[1]) for row in conn.execute(
+            select(jobs.c.name, jobs.c.scenario_sha).where(jobs.c.batch_id == batch_id))}
+
+
 def outcome_counts(engine: Engine, batch_id: int) -> list[OutcomeCount]:
     """The finished jobs of every batch up to ``batch_id`` (inclusive) whose scenario content is that of
     a job of batch ``batch_id``, counted per name, content and state (one statement: the database

@@ -36,14 +36,25 @@ _RECORD_COLUMNS: Columns = (("item", "left"), ("unit", "left"), ("samples", "rig
                             ("min run", "left"), ("median", "right"), ("max", "right"), ("max run", "left"))
 
 
+#: Values with no text in them (left as they are: a report's run ids and counts are most of its values).
+_NO_TEXT = (int, float, bool, type(None))
+
+
 def escaped(value: Any) -> Any:
     """``value`` (the report, or any part of it) with every string in it made :func:`printable`."""
-    if isinstance(value, str):
+    kind = type(value)
+    if kind is str:
         return printable(value)
-    if isinstance(value, tuple):
-        return tuple(escaped(part) for part in value)
-    if isinstance(value, list):
-        return [escaped(part) for part in value]
+    if kind in _NO_TEXT:
+        return value
+    if kind is tuple or kind is list:
+        if all(type(part) in _NO_TEXT for part in value):
+            return value
+        if all(type(part) is str for part in value):
+            parts = list(map(printable, value))
+        else:
+            parts = [escaped(part) for part in value]
+        return tuple(parts) if kind is tuple else parts
     if isinstance(value, dict):
         return {escaped(key): escaped(part) for key, part in value.items()}
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

@@ -36,7 +36,12 @@ class VariantRecord:
 def variant_records(store: QueueStore, jobs: Iterable[Job], batch_id: int) -> dict[str, VariantRecord]:
     """Per variant of ``jobs`` (batch ``batch_id``'s, attempt suffixes taken off), its passes and
     non-passes in every batch of the store up to ``batch_id`` with the same name and content."""
-    keys = {(split_attempt(job.name)[0], job.scenario_sha) for job in jobs}
+    return keyed_records(store, {(job.name, job.scenario_sha) for job in jobs}, batch_id)
+
+
+def keyed_records(store: QueueStore, named: set[tuple[str, str]], batch_id: int) -> dict[str, VariantRecord]:
+    """:func:`variant_records` of the jobs named and contents given as ``(job name, scenario sha)``."""
+    keys = {(split_attempt(name)[0], sha) for name, sha in named}
     tallies: dict[str, list[int]] = {}
     for row in outcome_counts(store.engine, batch_id):
         variant = split_attempt(row.name)[0]

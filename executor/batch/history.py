@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import replace
 
 from coverage_engine.coverage.diff import Side, VariantOutcome
@@ -29,7 +30,7 @@ from store.batch_summaries import BatchSummary, read_summaries, record_summary
 from store.coverage_records import CoverageRecords
 from store.database import StoreError
 from store.jobs import Batch
-from store.outcome_history import batch_counts
+from store.outcome_history import batch_counts, ran_before, variant_keys
 from store.queue import QueueStore
 from store.states import FINAL, JobState
 
@@ -63,8 +64,11 @@ def record_batch_summary(store: QueueStore, batch: Batch, outcome: BatchOutcome)
         pass
 
 
-def history_points(store: QueueStore, *, last: int | None = None) -> list[TrendPoint]:
-    """The store's batches, oldest first (the ``last`` ones), with their kept figures or computed ones."""
+def history_points(store: QueueStore, *, last: int | None = None,
+                   known: Mapping[int, tuple[float | None, int]] | None = None) -> list[TrendPoint]:
+    """The store's batches, oldest first (the ``last`` ones), with their kept figures, those ``known``
+    (batch id: grade and holes, already computed by the caller), or computed ones."""
+    known = known or {}
     rows = batch_counts(store.engine, last=last)
     kept = read_summaries(store.engine, [row.batch_id for row in rows])
     points = []
@@ -75,6 +79,8 @@ def history_points(store: QueueStore, *, last: int | None = None) -> list[TrendP
         if summary is not None:
             point = replace(point, variants=summary.variants, variants_passed=summary.variants_passed,
                             flaky=summary.flaky, grade=summary.grade, holes=summary.holes)
+        elif row.batch_id in known:
+            point = replace(point, grade=known[row.batch_id][0], holes=known[row.batch_id][1])
         elif row.finished:
             grade, holes = _grade_and_holes(store, store.batch(row.batch_id))
             point = replace(point, grade=grade, holes=holes)
@@ -102,18 +108,25 @@ def store_side(store: QueueStore, batch: Batch) -> Side:
     return Side(f"batch {batch.id} ({batch.output_dir})", outcomes, batch_report(store, batch))
 
 
-def store_extras(url: str | None, results: str | None, batch_id: int | None, *,
-                 trend: bool = True) -> dict[str, object]:
+def store_extras(url: str | None, results: str | None, batch_id: int | None, *, trend: bool = True,
+                 graded: tuple[float | None, int] | None = None) -> dict[str, object]:
     """What the reports show beyond the batch, for a stored batch: the store's batches (``history``, up to
-    :data:`KEPT_BATCHES`; only with ``trend``), the batch's id (``current``) and its flaky variants."""
+    :data:`KEPT_BATCHES`; only with ``trend``), the batch's id (``current``) and its flaky variants.
+    ``graded``: the grade and holes of the report being made (of this batch: not computed a second time)."""
     from executor.batch.coverage_source import pick_batch
-    from executor.batch.flaky import variant_records
+    from executor.batch.flaky import keyed_records
 
     store = QueueStore.open_existing(url)
     try:
         batch = pick_batch(store, results, batch_id)
-        points = [p for p in history_points(store, last=KEPT_BATCHES) if p.batch <= batch.id] if trend else []
-        records = variant_records(store, store.jobs(batch.id), batch.id)
+        known = {batch.id: graded} if graded is not None else {}
+        points = [p for p in history_points(store, last=KEPT_BATCHES, known=known) if p.batch <= batch.id] \
+            if trend else []
+        kept = read_summaries(store.engine, [batch.id]).get(batch.id)
+        # A batch whose kept figures count no flaky variant needs no look at the store's other batches.
+        none = (kept is not None and kept.flaky == 0) or (batch.options.repeat <= 1 and not ran_before(store.engine,
+                                                                                                      batch.id))
+        records = {} if none else keyed_records(store, variant_keys(store.engine, batch.id), batch.id)
     finally:
         store.close()
     flaky = [(name, record.text()) for name, record in records.items() if record.flaky]

@@ -26,6 +26,7 @@ from coverage_engine.results.files import RESULT_FILE
 from coverage_engine.results.names import file_stem, scenario_classname, variant_name
 from coverage_engine.results.scenario_result import ScenarioResult
 
+
 def iso_timestamp(epoch: float) -> str:
     """``epoch`` (seconds) as local time in ISO 8601 without fraction or zone, as JUnit readers expect."""
     return time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(epoch))

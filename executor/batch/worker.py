@@ -88,7 +88,9 @@ class Worker:
                                   and settings.batch_id is not None)
         self.recorder = ResultRecorder(store, reporter, self.backoff, RecorderHooks(
             stop=self.stop, requeued=self.pacer.wake, halted=lambda _batch: self.pacer.idle(),
-            stopping=self._stop_is_set), self.summary, at_once=settings.slots == 1)
+            stopping=self._stop_is_set), self.summary,
+            # -j 1, and a worker of a shared queue (other hosts act on its records): each result at once
+            at_once=settings.slots == 1 or not settings.hand_over_ahead)
         self._events: queue.Queue[Started | Done] = queue.Queue()
         self._runs: dict[int, JobRun] = {}             # jobs started and not ended
         self._batches: dict[int, Batch] = {}

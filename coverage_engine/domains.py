@@ -77,6 +77,11 @@ class InputDomain:
         return self
 
 
+def drawn_units_of(domains: Iterable[InputDomain]) -> dict[str, str]:
+    """The unit of each parameter a sampler drew (their values are shown rounded, with the unit)."""
+    return {domain.key: domain.unit for domain in domains if domain.drawn}
+
+
 def drawn_text(value: float, unit: str = "") -> str:
     """A drawn number as headers and testcase names show it: 4 significant digits and its unit
     (``116.2kph``, ``12350ms``); the exact value stays in the assignment and the JUnit properties."""

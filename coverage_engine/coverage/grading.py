@@ -32,7 +32,7 @@ from coverage_engine.coverage.model import (
 )
 from coverage_engine.coverage.plan import CoveragePlan
 from coverage_engine.coverage.runs import REPORT_VERDICTS, RunSource
-from coverage_engine.domains import InputDomain
+from coverage_engine.domains import InputDomain, drawn_units_of
 from coverage_engine.results.verdicts import FAILING
 
 #: Most cells a cross may have to be graded and drawn.
@@ -294,7 +294,7 @@ def grade(merger: CoverageMerger, plan: CoveragePlan | None = None, *, source: s
                     reasons=tuple(merger.run_reasons), folders=tuple(merger.run_folders),
                     logs=tuple(merger.run_logs),
                     values=merger.failing_values,
-                    drawn_units={key: d.unit for key, d in domains.items() if d.drawn})
+                    drawn_units=drawn_units_of(domains.values()))
     return CoverageReport(source=source, complete=complete, runs=runs, verdict_counts=verdicts,
                           items=tuple(items), grade=overall_grade(items), notes=tuple(notes or ()),
                           warnings=tuple(warnings), plan_file=plan.file, root=root)

@@ -22,7 +22,7 @@ import re
 from collections.abc import Mapping
 from pathlib import PurePath
 
-from coverage_engine.domains import drawn_text, header_domains
+from coverage_engine.domains import drawn_text, drawn_units_of, header_domains
 
 #: Longest testcase name written (CI pages cut long names; the stem at its start keeps it unique).
 MAX_NAME_CHARS = 120
@@ -58,7 +58,7 @@ def _value_text(value: object) -> str:
 def drawn_units(header: str) -> dict[str, str]:
     """The unit of each parameter a sampler drew, from the ``# domain`` lines of a ``.sce`` header (the
     variants of one variation share their header: read once, not once per job). Do not change the result."""
-    return {d.key: d.unit for d in header_domains(header) if d.drawn}
+    return drawn_units_of(header_domains(header))
 
 
 def _shown(key: str, value: object, drawn: Mapping[str, str]) -> str:

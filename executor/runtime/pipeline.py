@@ -16,6 +16,7 @@ import os
 import sys
 from collections.abc import Sequence
 
+from coverage_engine.domains import drawn_units_of
 from coverage_engine.errors import OscError
 from coverage_engine.results.files import RESULT_FILE
 from coverage_engine.suffixes import SCE_SUFFIX
@@ -149,7 +150,7 @@ def report_names(scenario: str, runs=(), document=None):
 
     document = document or _variant(scenario)
     variant = (document.source, document.scenario, document.assignment,
-               {d.key: d.unit for d in document.domains if d.drawn}) if document is not None else None
+               drawn_units_of(document.domains)) if document is not None else None
     return names_for(scenario, [(run.name, run.scenario.name) for run in runs], variant)
 
 

@@ -26,9 +26,13 @@ from dataclasses import dataclass
 
 from coverage_engine.search.estimate import MAX_BOUNDARY_VARIANTS, AxisBoundary, BoundaryEstimate
 from coverage_engine.search.space import Point, Space, euclidean
+from coverage_engine.search.surface import Surface, fit_surface
 
 #: Candidate points drawn per proposal when space is filled or the boundary is explored.
 CANDIDATES_PER_POINT = 32
+
+#: A new point on a pair stays within the middle of it: between this fraction and one less it.
+MIDDLE_PART = 0.25
 
 #: Times a candidate is moved onto the estimated boundary (its nearest runs change as it moves).
 SURFACE_STEPS = 3
@@ -96,11 +100,12 @@ def neighbour_pairs(space: Space, observations: Sequence[Observation], resolutio
 
 
 def _far_points(space: Space, taken: list[Point], count: int, rng: random.Random,
-                surface: Sequence[Observation] = ()) -> list[Point]:
+                surface: Sequence[Observation] = (), fitted: Surface | None = None) -> list[Point]:
     """``count`` points, each as far as possible from every point taken so far (the best of a random
     draw); with ``surface`` (the runs), each candidate is first moved onto the boundary the runs estimate
     (where the nearest failing and the nearest passing run are equally far: a nearest-neighbour
-    classifier's surface), so the points spread along the boundary instead of over the whole space."""
+    classifier's surface, or the ``fitted`` one where a candidate reaches it), so the points spread along the
+    boundary instead of over the whole space."""
     chosen: list[Point] = []
     dims = len(space.axes)
     failing = [o.point for o in surface if o.failing]
@@ -111,7 +116,8 @@ def _far_points(space: Space, taken: list[Point], count: int, rng: random.Random
         for _ in range(CANDIDATES_PER_POINT):
             candidate = space.snap([rng.random() for _ in range(dims)])
             if failing and passing:
-                candidate = space.snap(_onto_surface(candidate, failing, passing))
+                moved = fitted.onto(candidate) if fitted is not None else None
+                candidate = space.snap(moved if moved is not None else _onto_surface(candidate, failing, passing))
             gap = min((euclidean(candidate, p) for p in taken + chosen), default=math.inf)
             if gap > best_gap:
                 best, best_gap = candidate, gap
@@ -142,9 +148,10 @@ def _onto_surface(point: Sequence[float], failing: Sequence[Point], passing: Seq
 
 
 def _bisections(space: Space, observations: Sequence[Observation], pairs: Sequence[Pair], samples: int,
-                resolution: float) -> list[Point]:
-    """Midpoints of the longest unlocated pairs, at most ``samples``, none within the resolution of
-    another proposal or of a run."""
+                resolution: float, surface: Surface | None) -> list[Point]:
+    """A point on each of the longest unlocated pairs, at most ``samples``, none within the resolution of
+    another proposal or of a run: where the fitted surface crosses the pair, kept within its middle half
+    (so every pair shrinks to at most three quarters whatever the fit says), else its middle."""
     taken = [o.point for o in observations]
     chosen: list[Point] = []
     for pair in pairs:
@@ -153,7 +160,9 @@ def _bisections(space: Space, observations: Sequence[Observation], pairs: Sequen
         if pair.located:
             continue
         a, b = observations[pair.first].point, observations[pair.second].point
-        middle = space.snap([(x + y) / 2 for x, y in zip(a, b, strict=True)])
+        t = surface.crossing(a, b) if surface is not None else None
+        t = 0.5 if t is None else min(1 - MIDDLE_PART, max(MIDDLE_PART, t))
+        middle = space.snap([x + t * (y - x) for x, y in zip(a, b, strict=True)])
         if middle in taken or any(euclidean(middle, c) < resolution / 2 for c in chosen):
             continue
         chosen.append(middle)
@@ -192,10 +201,12 @@ def propose_boundary(space: Space, observations: Sequence[Observation], samples:
     rng = random.Random(seed)
     pairs = neighbour_pairs(space, observations, resolution)
     taken = [o.point for o in observations]
-    points = _bisections(space, observations, pairs, samples, resolution)
+    fitted = fit_surface([o.point for o in observations], [o.failing for o in observations])
+    points = _bisections(space, observations, pairs, samples, resolution, fitted)
     done = bool(pairs) and all(pair.located for pair in pairs)
     one = _one_dimensional(space, observations)
     if not (done and len(space.axes) == 1):        # a located flip in one dimension needs nothing more
-        points += _far_points(space, taken + points, samples - len(points), rng, observations if pairs else ())
+        points += _far_points(space, taken + points, samples - len(points), rng, observations if pairs else (),
+                              fitted)
     axes = {space.axes[0].key: one} if one is not None else {}
     return BoundaryProposal(tuple(points), BoundaryEstimate(axes, _boundary_variants(observations, pairs)), done)

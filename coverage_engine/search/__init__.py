@@ -6,3 +6,10 @@ pure functions here: they take the axes of the variation (:mod:`.space`), the ru
 what the round estimated (:mod:`.estimate`). The variation pipeline turns the points into variants like
 any sampler's; nothing here runs a scenario, forks or waits (ask/tell: the batch runs the proposals).
 """
+
+#: The adaptive strategies of ``scenario_variation --from`` (the goals of the search loop). Kept here, in a
+#: module that imports nothing, so the command line can list them without loading the search.
+ADAPTIVE = ("boundary", "fill-holes", "falsify")
+
+#: Default of ``--resolution``: a boundary is located to 1 % of each range.
+DEFAULT_RESOLUTION = 0.01

@@ -32,7 +32,7 @@ from coverage_engine.search.surface import Surface, fit_surface
 CANDIDATES_PER_POINT = 32
 
 #: A new point on a pair stays within the middle of it: between this fraction and one less it.
-MIDDLE_PART = 0.25
+MIDDLE_PART = 0.1
 
 #: Times a candidate is moved onto the estimated boundary (its nearest runs change as it moves).
 SURFACE_STEPS = 3
@@ -100,28 +100,37 @@ def neighbour_pairs(space: Space, observations: Sequence[Observation], resolutio
 
 
 def _far_points(space: Space, taken: list[Point], count: int, rng: random.Random,
-                surface: Sequence[Observation] = (), fitted: Surface | None = None) -> list[Point]:
+                surface: Sequence[Observation] = (), fitted: Surface | None = None, reach: float = math.inf) \
+        -> list[Point]:
     """``count`` points, each as far as possible from every point taken so far (the best of a random
-    draw); with ``surface`` (the runs), each candidate is first moved onto the boundary the runs estimate
-    (where the nearest failing and the nearest passing run are equally far: a nearest-neighbour
-    classifier's surface, or the ``fitted`` one where a candidate reaches it), so the points spread along the
-    boundary instead of over the whole space."""
+    draw). With ``surface`` (the runs), each candidate is first moved onto the boundary the runs estimate
+    (the ``fitted`` surface where a candidate reaches it, else where the nearest failing and the nearest
+    passing run are equally far: a nearest-neighbour classifier's surface), and candidates with a failing
+    and a passing run within ``reach`` are preferred: there the estimate is bracketed by runs, so the points
+    spread along the boundary where it is known instead of guessing where it is not."""
     chosen: list[Point] = []
     dims = len(space.axes)
     failing = [o.point for o in surface if o.failing]
     passing = [o.point for o in surface if not o.failing]
     for _ in range(count):
         best: Point | None = None
-        best_gap = -1.0
+        best_score = -math.inf
         for _ in range(CANDIDATES_PER_POINT):
             candidate = space.snap([rng.random() for _ in range(dims)])
+            score = 0.0
             if failing and passing:
                 moved = fitted.onto(candidate) if fitted is not None else None
                 candidate = space.snap(moved if moved is not None else _onto_surface(candidate, failing, passing))
+                spread = max(euclidean(candidate, _nearest(candidate, failing)),
+                             euclidean(candidate, _nearest(candidate, passing)))
+                score = 0.0 if spread <= reach else -spread
             gap = min((euclidean(candidate, p) for p in taken + chosen), default=math.inf)
-            if gap > best_gap:
-                best, best_gap = candidate, gap
-        if best is None or best_gap <= 0:
+            if gap <= 0:
+                continue
+            score = score or gap
+            if score > best_score:
+                best, best_score = candidate, score
+        if best is None:
             break
         chosen.append(best)
     return chosen
@@ -206,7 +215,11 @@ def propose_boundary(space: Space, observations: Sequence[Observation], samples:
     done = bool(pairs) and all(pair.located for pair in pairs)
     one = _one_dimensional(space, observations)
     if not (done and len(space.axes) == 1):        # a located flip in one dimension needs nothing more
+        lengths = sorted(pair.length for pair in pairs)
+        reach = lengths[len(lengths) // 2] if lengths else math.inf
         points += _far_points(space, taken + points, samples - len(points), rng, observations if pairs else (),
-                              fitted)
+                              fitted, reach)
     axes = {space.axes[0].key: one} if one is not None else {}
-    return BoundaryProposal(tuple(points), BoundaryEstimate(axes, _boundary_variants(observations, pairs)), done)
+    estimate = BoundaryEstimate(axes, _boundary_variants(observations, pairs), len(pairs),
+                                sum(1 for pair in pairs if pair.located))
+    return BoundaryProposal(tuple(points), estimate, done)

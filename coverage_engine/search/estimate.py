@@ -11,8 +11,9 @@ round's variants)::
                   "holes": null | {"targeted": 5, "guessed": 2},
                   "done": false}}
 
-``axes`` is filled where the boundary is one-dimensional (one axis varies); otherwise ``variants`` lists
-runs on either side of it, closer than the resolution. ``done`` says the goal is met: the boundary
+``axes`` is filled where the boundary is one-dimensional (one axis varies); ``variants`` lists the runs
+on either side of it, closer than the resolution; ``boundary`` also says how many neighbouring pairs of
+runs disagree (``pairs``) and how many of them are located (``located``). ``done`` says the goal is met: the boundary
 located to the resolution, a failing variant found, no hole left.
 """
 
@@ -43,8 +44,13 @@ class AxisBoundary:
 
 @dataclass(frozen=True)
 class BoundaryEstimate:
+    """The boundary per axis (where it is one-dimensional), the runs beside it, and how many neighbouring
+    pairs of runs disagree (``pairs``), of which ``located`` are within the resolution."""
+
     axes: Mapping[str, AxisBoundary] = field(default_factory=dict)
     variants: tuple[Mapping[str, object], ...] = ()
+    pairs: int = 0
+    located: int = 0
 
 
 @dataclass(frozen=True)
@@ -98,7 +104,8 @@ def estimate_dict(estimate: Estimate) -> dict[str, Any]:
         "boundary": None if boundary is None else {
             "axes": {key: {"value": _number(axis.value), "error": _number(axis.error), "unit": axis.unit}
                      for key, axis in boundary.axes.items()},
-            "variants": [dict(v) for v in boundary.variants[:MAX_BOUNDARY_VARIANTS]]},
+            "variants": [dict(v) for v in boundary.variants[:MAX_BOUNDARY_VARIANTS]],
+            "pairs": boundary.pairs, "located": boundary.located},
         "worst": None if worst is None else {"objective": worst.objective, "value": _number(worst.value),
                                              "assignment": dict(worst.assignment), "failed": worst.failed},
         "holes": None if holes is None else {"targeted": holes.targeted, "guessed": holes.guessed},
@@ -136,9 +143,11 @@ def estimate_lines(record: RoundRecord) -> list[str]:
         for key, axis in boundary.axes.items():
             unit = axis.unit
             lines.append(f"boundary: {key} = {axis.value:.4g}{unit} ± {axis.error:.2g}{unit}")
-        if not boundary.axes:
-            lines.append(f"boundary: {len(boundary.variants)} run(s) lie on either side of it, within the "
-                         "resolution" if boundary.variants else "boundary: no run fails and passes side by side yet")
+        if not boundary.pairs:
+            lines.append("boundary: not seen yet (no run failed, or none passed)")
+        elif not boundary.axes:
+            lines.append(f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located} of "
+                         f"them within the resolution ({len(boundary.variants)} run(s) beside the boundary)")
     if estimate.worst is not None:
         worst = estimate.worst
         lines.append(f"worst {worst.objective} = {worst.value:.4g} ({'failed' if worst.failed else 'passed'}) at "

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.proposals import FIRST_ROUND
+from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
 from coverage_engine.search.boundary import Observation, propose_boundary
 from coverage_engine.search.errors import SearchError
 from coverage_engine.search.estimate import Estimate, RoundRecord
@@ -19,12 +20,6 @@ from coverage_engine.search.falsify import MARGIN, Scored, propose_falsify
 from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.holes import propose_holes
 from coverage_engine.search.space import Point, Space
-
-#: The adaptive strategies of ``scenario_variation --from`` (the search loop's goals).
-ADAPTIVE = ("boundary", "fill-holes", "falsify")
-
-#: Default of ``--resolution``: the boundary is located to 1 % of each range.
-DEFAULT_RESOLUTION = 0.01
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
+from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
 from coverage_engine.suffixes import SCE_SUFFIX
 from coverage_engine.variation.strategies import COVERING
 from executor.output.terminal import printable
@@ -41,6 +42,7 @@ if TYPE_CHECKING:
     from coverage_engine.variation.output import Generated
     from coverage_engine.variation.plan import ParsedVariation, PlannedVariation, Resolve, VariationPlan
     from coverage_engine.variation.strategies import StrategyOptions
+    from executor.variation.search import AdaptiveRound
     from store.variant_history import HeldVariants
 
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
@@ -97,13 +99,29 @@ class VariationRequest:
     seed: int | None = None
     wait: bool = False
     only_new: bool = False
+    #: Results folders of earlier runs an adaptive strategy (boundary, fill-holes, falsify) proposes from.
+    from_results: tuple[str, ...] = ()
+    #: falsify: the record() item to minimise (or ``margin``); boundary with ``threshold``: the item that crosses it.
+    objective: str | None = None
+    maximise: bool = False
+    threshold: float | None = None
+    resolution: float = DEFAULT_RESOLUTION
+    #: The round written in each variant's proposal line; None: one more than the highest round read.
+    round_number: int | None = None
+
+    @property
+    def adaptive(self) -> bool:
+        return self.strategy in ADAPTIVE
 
     def recorded_options(self, source: Path, seed: int | None = None) -> dict[str, object]:
         """The options kept with the run in the store, under the command line's names."""
         return {"output_dir": self.output_dir, "debug": self.debug, "log_model": self.log_model,
                 "list": self.list_only, "scenario_parameter_file": self.parameter_file,
                 "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
-                "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new}
+                "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new,
+                **({"from": list(self.from_results), "objective": self.objective, "maximise": self.maximise,
+                    "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number}
+                   if self.adaptive else {})}
 
 
 def run(request: VariationRequest) -> int:
@@ -134,12 +152,16 @@ def run(request: VariationRequest) -> int:
             echo(f"seed {seed} (pass --seed {seed} to make the same variants again)")
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
         parsed = parse_variation(Path(request.scenario), documents)
+        _check_adaptive(request, Location(str(parsed.path), 0, 0))
         engine = _open_store(request.store) if request.only_new else None
         held = None
         if engine is not None:
             held = _held(parsed, request, engine)
             strategies.check_continuable(options, len(held.assignments), held.runs, Location(str(parsed.path), 0, 0))
-        plan, tuples = _choose(parsed, request, options, held)
+        search = _search(parsed, request, seed or 0) if request.adaptive else None
+        if search is not None and not search.planned.rows:
+            return _nothing_proposed(request, search)
+        plan, tuples = _choose(parsed, request, options, held, search)
         report.describe(plan)
         if request.strategy != "full":
             echo(_strategy_summary(plan, request, tuples))
@@ -162,17 +184,61 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
-            return _write(plan, request, engine or _open_store(request.store), seed, held, tuples)
+            code = _write(plan, request, engine or _open_store(request.store), seed, held, tuples)
+            if search is not None and code != EXIT_INTERRUPTED:
+                from executor.variation.search import write_estimate
+
+                echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
+            return code
+
+
+def _check_adaptive(request: VariationRequest, where: Location) -> None:
+    """``--from`` goes with an adaptive strategy, and an adaptive strategy needs ``--from``."""
+    from coverage_engine.variation.strategies import StrategyError
+
+    if request.adaptive and not request.from_results:
+        raise StrategyError(f"--strategy {request.strategy} proposes from earlier results: give them with --from "
+                            "RESULTS", where, hint="run a first round with --strategy lhs --samples N, run it with "
+                                                   "scenario_batch_execution, then pass its results folder")
+    if request.from_results and not request.adaptive:
+        raise StrategyError(f"--from is read by the adaptive strategies ({', '.join(ADAPTIVE)}), not by "
+                            f"--strategy {request.strategy}", where)
+
+
+def _nothing_proposed(request: VariationRequest, search: AdaptiveRound) -> int:
+    """An adaptive round with no point to try (its goal is met, or no hole is left): no variant is written, and
+    the estimate is kept all the same, so the search loop reads that it is done."""
+    from executor.variation.search import write_estimate
+
+    echo("no variant proposed: " + ("the goal is met" if search.record.estimate.done else "nothing is left to try"))
+    if not request.list_only:
+        os.makedirs(request.output_dir, exist_ok=True)
+        echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
+    return 0
+
+
+def _search(parsed: ParsedVariation, request: VariationRequest, seed: int) -> AdaptiveRound:
+    """The adaptive strategy's round: the earlier runs read, the estimate printed, the proposals planned."""
+    from executor.variation.search import adaptive_round
+
+    return adaptive_round(parsed, request.from_results, request.strategy, request.samples, seed,
+                          objective=request.objective, maximise=request.maximise, threshold=request.threshold,
+                          resolution=request.resolution, round_number=request.round_number)
 
 
 def _design(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
-            factor: int) -> PlannedVariation:
+            factor: int, search: AdaptiveRound | None = None) -> PlannedVariation:
     """The design stage: the points the request's strategy asks for (``factor`` x its samples for a sampler
-    redrawing after the keep conditions left out too many). An adaptive strategy plugs in here."""
+    redrawing after the keep conditions left out too many), or those an adaptive round proposed. A plain
+    strategy given a round number (the search loop's first round) writes the proposal line too."""
+    from coverage_engine.proposals import Proposal
     from coverage_engine.variation.design import design
 
+    if search is not None:
+        return search.planned
     limit = request.max_variants or DEFAULT_MAX_VARIANTS
-    planned = design(parsed, options, factor)
+    proposal = Proposal(request.round_number, request.strategy) if request.round_number is not None else None
+    planned = design(parsed, options, factor, proposal=proposal)
     wanted = planned.total if factor == 1 else options.samples or 0
     if wanted > limit and options.strategy not in COVERING:
         raise TooManyVariants(
@@ -185,7 +251,7 @@ def _design(parsed: ParsedVariation, request: VariationRequest, options: Strateg
 
 
 def _choose(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
-            held: HeldVariants | None) -> tuple[VariationPlan, TupleCoverage | None]:
+            held: HeldVariants | None, search: AdaptiveRound | None = None) -> tuple[VariationPlan, TupleCoverage | None]:
     """Design, check and choose: the plan to write, and for a covering array the tuples it covers.
 
     A sampler whose draws the keep conditions thin out draws twice as many until ``--samples`` are left.
@@ -200,7 +266,7 @@ def _choose(parsed: ParsedVariation, request: VariationRequest, options: Strateg
     tuples = None
     factor = 1
     while True:
-        planned = _design(parsed, request, options, factor)
+        planned = _design(parsed, request, options, factor, search)
         if covering and options.t <= len(planned.sizes):   # (a strength beyond the dimensions is said later)
             refuse_oversized(planned, options, limit)      # before 2,000 values are checked
         checked = check_values(planned)

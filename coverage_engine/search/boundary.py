@@ -156,25 +156,45 @@ def _onto_surface(point: Sequence[float], failing: Sequence[Point], passing: Seq
     return here
 
 
+def _shares(pairs: Sequence[Pair], samples: int, dims: int) -> list[int]:
+    """How many points each unlocated pair gets: one each, longest first; in one dimension the samples left
+    are shared out too (there is no "along the boundary" to spread them to), longest pairs first."""
+    open_pairs = [i for i, pair in enumerate(pairs) if not pair.located]
+    shares = [0] * len(pairs)
+    for i in open_pairs[:samples]:
+        shares[i] = 1
+    left = samples - min(samples, len(open_pairs))
+    while dims == 1 and open_pairs and left > 0:
+        for i in open_pairs:
+            if left == 0:
+                break
+            shares[i] += 1
+            left -= 1
+    return shares
+
+
 def _bisections(space: Space, observations: Sequence[Observation], pairs: Sequence[Pair], samples: int,
                 resolution: float, surface: Surface | None) -> list[Point]:
-    """A point on each of the longest unlocated pairs, at most ``samples``, none within the resolution of
-    another proposal or of a run: where the fitted surface crosses the pair, kept within its middle half
-    (so every pair shrinks to at most three quarters whatever the fit says), else its middle."""
+    """Points on the longest unlocated pairs, at most ``samples``, none within half the resolution of another
+    proposal or of a run. A pair given one point gets it where the fitted surface crosses it, kept away from
+    its ends (so every pair shrinks whatever the fit says), else at its middle; one given ``m`` points (in one
+    dimension) gets them evenly spaced, cutting it into ``m + 1`` parts."""
     taken = [o.point for o in observations]
     chosen: list[Point] = []
-    for pair in pairs:
-        if len(chosen) >= samples:
-            break
-        if pair.located:
+    for pair, share in zip(pairs, _shares(pairs, samples, len(space.axes)), strict=True):
+        if not share:
             continue
         a, b = observations[pair.first].point, observations[pair.second].point
-        t = surface.crossing(a, b) if surface is not None else None
-        t = 0.5 if t is None else min(1 - MIDDLE_PART, max(MIDDLE_PART, t))
-        middle = space.snap([x + t * (y - x) for x, y in zip(a, b, strict=True)])
-        if middle in taken or any(euclidean(middle, c) < resolution / 2 for c in chosen):
-            continue
-        chosen.append(middle)
+        if share == 1:
+            t = surface.crossing(a, b) if surface is not None else None
+            spots = [0.5 if t is None else min(1 - MIDDLE_PART, max(MIDDLE_PART, t))]
+        else:
+            spots = [j / (share + 1) for j in range(1, share + 1)]
+        for t in spots:
+            point = space.snap([x + t * (y - x) for x, y in zip(a, b, strict=True)])
+            if point in taken or any(euclidean(point, c) < resolution / 2 for c in chosen):
+                continue
+            chosen.append(point)
     return chosen
 
 

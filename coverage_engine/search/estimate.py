@@ -154,7 +154,7 @@ def estimate_lines(record: RoundRecord) -> list[str]:
                      f"{_assignment_text(worst.assignment)}")
     if estimate.holes is not None:
         holes = estimate.holes
-        lines.append(f"holes: {holes.targeted} of the varied parameters and their crosses aimed at"
+        lines.append(f"holes: aiming at {holes.targeted} hole(s) of the varied parameters and their crosses"
                      + (f"; {holes.guessed} of measured items guessed at (inputs near the runs that came "
                         "closest: a guess)" if holes.guessed else ""))
     lines.append("goal met" if estimate.done else "goal not met yet")

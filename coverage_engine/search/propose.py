@@ -21,6 +21,9 @@ from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.holes import propose_holes
 from coverage_engine.search.space import Point, Space
 
+#: What a strategy's round gives: its points, its estimate and notes to print.
+StrategyRound = tuple[tuple[Point, ...], Estimate, tuple[str, ...]]
+
 
 @dataclass(frozen=True)
 class SearchOptions:
@@ -62,7 +65,7 @@ def _value(run: PastRun, objective: str, maximise: bool) -> float | None:
     return max(values) if maximise else min(values)
 
 
-def _boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions):
+def _boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
     observations = []
     for run, point in placed:
         if options.threshold is None:
@@ -78,14 +81,14 @@ def _boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: Se
     return proposal.points, Estimate(boundary=proposal.estimate, done=proposal.done), ()
 
 
-def _falsify(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions):
+def _falsify(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
     objective = options.objective or MARGIN
     scored = []
     for run, point in placed:
         value = _value(run, objective, options.maximise)
         if value is not None:
             scored.append(Scored(point, value, run.failed, run.assignment))
-    notes = ()
+    notes: tuple[str, ...] = ()
     if placed and not scored:
         notes = (f"no run read recorded '{objective}': the optimiser starts from scratch",)
     proposal = propose_falsify(space, scored, options.samples, options.seed, objective, options.maximise,
@@ -95,13 +98,15 @@ def _falsify(space: Space, placed: Sequence[tuple[PastRun, Point]], options: Sea
 
 def _measured(history: History, space: Space, placed: Sequence[tuple[PastRun, Point]]) \
         -> list[tuple[ItemDecl, list[tuple[Point, Sequence[object]]]]]:
-    found = []
+    found: list[tuple[ItemDecl, list[tuple[Point, Sequence[object]]]]] = []
     for decl in history.covers.values():
-        found.append((decl, [(point, run.covers.get(decl.name, ())) for run, point in placed]))
+        values: list[tuple[Point, Sequence[object]]] = [(point, run.covers.get(decl.name, ())) for run, point in placed]
+        found.append((decl, values))
     return found
 
 
-def _holes(space: Space, history: History, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions):
+def _holes(space: Space, history: History, placed: Sequence[tuple[PastRun, Point]],
+           options: SearchOptions) -> StrategyRound:
     proposal = propose_holes(space, [p for _, p in placed], [r.assignment for r, _ in placed], options.samples,
                              options.seed, history.domains, _measured(history, space, placed))
     notes = tuple(f"a guess: aiming at {name} near the run whose value came closest (what a run measures "

@@ -31,8 +31,8 @@ class OscError(Exception):
         """``file:line:col: error: message``, the position as ``place`` names it (for a variant, the
         ``.osc`` line the user wrote and the ``.sce`` line: see ``coverage_engine.files.sce.VariantLines``)."""
         loc = self.location
-        if loc is not None and loc.line < 1:  # a whole file, no position in it
-            return f"{loc.file}: error: {self.message}"
+        if loc is not None and loc.is_whole_file:  # no position in it
+            return f"{loc}: error: {self.message}"
         if loc is not None:
             return f"{place(loc)}: error: {self.message}"
         return f"error: {self.message}"

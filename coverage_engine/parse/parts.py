@@ -6,8 +6,9 @@ rule has optional parts the positions shift, so a part is found by what it is: a
 name (``token(children, "NAME")``), a built value by its class (``node(children, s.TypeRef)``). The
 sub-rules that build no syntax node of their own (``with:`` blocks, argument lists, method parameter
 lists, ``external`` implementations, SI arguments) build the small records here, so their parents can
-ask for them by class too. Each record keeps the span of what it was built from: a rule's location runs
-from the start of its first part to the end of its last (``BehaviorExpressionRules.loc``).
+ask for them by class too. A record that can be the first or last part of its parent keeps the span it
+was built from, as a rule's location runs from the start of its first part to the end of its last
+(``BehaviorExpressionRules.loc``); the lists that always sit between parentheses keep none.
 """
 
 from __future__ import annotations
@@ -26,10 +27,10 @@ T = TypeVar("T")
 def token(children: Sequence[object], *kinds: str) -> Token:
     """The first token of terminal ``kinds`` (``"NAME"``, ``"STRING"`` …) among ``children``: a part
     the rule always has (missing, the grammar and the builder disagree)."""
-    found = maybe_token(children, *kinds)
-    if found is None:
-        raise LookupError(f"no {' or '.join(kinds)} token among the rule's parts {children!r}")
-    return found
+    for child in children:
+        if type(child) is Token and child.type in kinds:
+            return child
+    raise LookupError(f"no {' or '.join(kinds)} token among the rule's parts {children!r}")
 
 
 def maybe_token(children: Sequence[object], *kinds: str) -> Token | None:
@@ -47,10 +48,10 @@ def tokens(children: Sequence[object], kind: str) -> list[Token]:
 
 def node(children: Sequence[object], kind: type[T]) -> T:
     """The first value of class ``kind`` a sub-rule built among ``children``: a part the rule always has."""
-    found = maybe_node(children, kind)
-    if found is None:
-        raise LookupError(f"no {kind.__name__} among the rule's parts {children!r}")
-    return found
+    for child in children:
+        if isinstance(child, kind):
+            return child
+    raise LookupError(f"no {kind.__name__} among the rule's parts {children!r}")
 
 
 def maybe_node(children: Sequence[object], kind: type[T]) -> T | None:
@@ -63,13 +64,13 @@ def maybe_node(children: Sequence[object], kind: type[T]) -> T | None:
 
 def nodes(children: Sequence[object], kind: type[T]) -> tuple[T, ...]:
     """Every value of class ``kind`` among ``children``, in order (``member+``, ``import_stmt*``)."""
-    return tuple(child for child in children if isinstance(child, kind))
+    return tuple([child for child in children if isinstance(child, kind)])
 
 
 def built(children: Sequence[object]) -> tuple[object, ...]:
     """Every value a sub-rule built, in order: the children that are not tokens (``keep(expr)``'s expression
     is ``(constraint,) = built(children)``)."""
-    return tuple(child for child in children if type(child) is not Token)
+    return tuple([child for child in children if type(child) is not Token])
 
 
 # ---------------------------------------------------------------------------------------------- the
@@ -81,7 +82,6 @@ class Inherits(Record):
     """``inherits Parent`` of a struct, actor, action or scenario."""
 
     parent: s.QualifiedName
-    location: Location
 
 
 @record
@@ -105,13 +105,14 @@ class ArgumentList(Record):
     """The arguments of a call, an invocation, a modifier or a composite, positional ones first."""
 
     arguments: tuple[s.Argument, ...]
-    location: Location
 
 
 def arguments_of(children: Sequence[object]) -> tuple[s.Argument, ...]:
     """The arguments among a rule's ``[arguments]`` part: () when the parentheses are empty."""
-    found = maybe_node(children, ArgumentList)
-    return found.arguments if found is not None else ()
+    for child in children:
+        if type(child) is ArgumentList:
+            return child.arguments
+    return ()
 
 
 @record
@@ -119,7 +120,6 @@ class MethodParams(Record):
     """The parameter list of a ``def`` or of an ``event``."""
 
     params: tuple[s.MethodParameter, ...]
-    location: Location
 
 
 @record
@@ -128,7 +128,6 @@ class ExternalImpl(Record):
 
     function: s.QualifiedName
     arguments: tuple[s.Argument, ...]
-    location: Location
 
 
 @record
@@ -153,7 +152,6 @@ class SiArguments(Record):
     """The ``name: number`` list inside ``SI(...)``."""
 
     items: tuple[SiArgument, ...]
-    location: Location
 
 
 @record

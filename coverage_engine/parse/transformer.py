@@ -94,7 +94,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         return value
 
     def si_args(self, children):
-        return SiArguments(nodes(children, SiArgument), self.loc(children))
+        return SiArguments(nodes(children, SiArgument))
 
     def si_arg(self, children):
         return SiArgument(self.name(token(children, "NAME")), node(children, SignedNumber).value, self.loc(children))
@@ -138,7 +138,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         condition = maybe_node(children, Marker)
         if condition is not None:
             raise self.unsupported("conditional inheritance", condition.location)
-        return Inherits(node(children, s.QualifiedName), self.loc(children))
+        return Inherits(node(children, s.QualifiedName))
 
     def inherits_condition(self, children):
         return Marker(self.loc(children))
@@ -208,7 +208,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
                             maybe_node(children, s.TypeRef), impl.function, impl.arguments, self.loc(children))
 
     def method_params(self, children):
-        return MethodParams(nodes(children, s.MethodParameter), self.loc(children))
+        return MethodParams(nodes(children, s.MethodParameter))
 
     def method_param(self, children):
         default = maybe_node(children, Default)
@@ -219,7 +219,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
         only = maybe_token(children, "ONLY")
         if only is not None:
             raise self.unsupported("'only' methods", only)
-        return ExternalImpl(node(children, s.QualifiedName), arguments_of(children), self.loc(children))
+        return ExternalImpl(node(children, s.QualifiedName), arguments_of(children))
 
     def expression_impl(self, children):
         raise self.unsupported("methods implemented by 'is expression'", token(children, "ONLY", "EXPRESSION"))

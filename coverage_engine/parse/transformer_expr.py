@@ -22,7 +22,6 @@ from coverage_engine.parse.parts import (
     arguments_of,
     built,
     maybe_node,
-    node,
     nodes,
     token,
 )
@@ -134,20 +133,22 @@ class BehaviorExpressionRules:
                            with_block.members if with_block else (), self.loc(children))
 
     def composite_args(self, children):
-        return ArgumentList(arguments_of(children), self.loc(children))
+        return ArgumentList(arguments_of(children))
 
     def invocation(self, children):
-        name = node(children, s.QualifiedName)
+        name, _open, *inside, _close, end = children
         self.check_call_name(name)
-        with_block = maybe_node(children, WithBlock)
-        return s.Invocation(None, name, arguments_of(children), with_block.members if with_block else (),
-                            self.loc(children))
+        with_members = end.members if type(end) is WithBlock else ()
+        return s.Invocation(None, name, arguments_of(inside), with_members, self.loc(children))
 
     def wait(self, children):
         (condition,) = built(children)
         return s.Wait(None, condition, self.loc(children))
 
     def wait_condition(self, children):
+        if len(children) == 1:
+            (condition,) = children
+            return condition
         refused = maybe_node(children, Refusal)
         if refused is not None:
             raise self.unsupported(refused.what, refused.location)
@@ -164,7 +165,7 @@ class BehaviorExpressionRules:
         return s.Emit(None, self.name(token(children, "NAME")), arguments_of(children), self.loc(children))
 
     def emit_args(self, children):
-        return ArgumentList(arguments_of(children), self.loc(children))
+        return ArgumentList(arguments_of(children))
 
     def call(self, children):
         (expr,) = built(children)
@@ -186,7 +187,7 @@ class BehaviorExpressionRules:
                 raise OscSyntaxError("positional argument after a named argument", arg.location,
                                      self.source_line(arg.location.line),
                                      "write positional arguments first, then the named ones")
-        return ArgumentList(args, self.loc(children))
+        return ArgumentList(args)
 
     def named_argument(self, children):
         name, _colon, value = children
@@ -257,13 +258,13 @@ class BehaviorExpressionRules:
         return s.MemberAccess(target, self.name(name), self.loc(children))
 
     def call_expr(self, children):
-        callee, *rest = children
+        callee, _open, *inside, _close = children
         if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
             what = "type casts" if callee.member == "as" else "type tests"
             raise self.unsupported(f"{what} (.{callee.member}())", callee.location)
         if isinstance(callee, s.Identifier) and callee.name in UNSUPPORTED_EXPR_CALLS:
             raise self.unsupported(UNSUPPORTED_EXPR_CALLS[callee.name], callee.location)
-        return s.Call(callee, arguments_of(rest), self.loc(children))
+        return s.Call(callee, arguments_of(inside), self.loc(children))
 
     def element_access(self, children):
         raise self.unsupported("element access (list[index])", self.loc(children))

@@ -26,7 +26,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from coverage_engine.errors import OscError
+from coverage_engine.errors import OscError, UserError
 from coverage_engine.location import Location
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.output.terminal import printable
@@ -53,7 +53,7 @@ EXIT_INTERRUPTED = 130
 SCE_FILE_BYTES = 700
 
 
-class VariationStoreError(Exception):
+class VariationStoreError(UserError):
     """The store cannot be opened or written while recording a variation run."""
 
 

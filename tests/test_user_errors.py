@@ -20,7 +20,7 @@ from executor.actions.base import ActionError
 from executor.batch.errors import BadShard, BatchError
 from executor.runtime.pipeline import UsageProblem
 from executor.runtime.simulation import SimulationError
-from executor.variation.generation import VariationStoreError
+from executor.variation.writing import VariationStoreError
 from store.database import StoreError, StoreMissing
 from store.queue import StoreUnavailable
 

@@ -153,3 +153,13 @@ def test_a_round_numbers_itself_after_the_runs_read_and_keeps_its_estimate_in_th
         "boundary: t.speed = 26kph ± 8kph"
     again = propose_round(space, History(runs), SearchOptions("boundary", 2, 1, (), round_number=7))
     assert again.record.round == 7
+
+
+def test_a_compare_check_says_how_far_it_was_from_flipping_relative_to_its_values():
+    from executor.actions.compare import check_margin
+
+    assert check_margin("<=", 132.0, 80.0) == pytest.approx(-52 / 132)
+    assert check_margin("<", 40, 80) == pytest.approx(0.5) and check_margin(">=", 2.0, 1.0) == pytest.approx(0.5)
+    assert check_margin(">", 0.0, 0.0) == 0.0
+    assert check_margin("==", 1.0, 1.0) is None and check_margin("<", "a", "b") is None
+    assert check_margin("<", True, 2) is None

@@ -23,10 +23,10 @@ from typing import Any
 
 from coverage_engine.search.errors import SearchError
 from coverage_engine.search.estimate import WorstCase
+from coverage_engine.search.history import MARGIN
 from coverage_engine.search.space import Point, Space
 
-#: The name of the objective that is the margin of the ``compare`` checks.
-MARGIN = "margin"
+__all__ = ["MARGIN", "FalsifyProposal", "Scored", "propose_falsify", "worst_case"]
 
 @dataclass(frozen=True)
 class Scored:

@@ -24,8 +24,14 @@ from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.coverage.runs import RunInput
 from coverage_engine.domains import HEADER_CHARS, InputDomain, numeric_value
 from coverage_engine.proposals import FIRST_ROUND, header_proposal
+from coverage_engine.results.files import RESULT_FILE
+from coverage_engine.results.read import JunitUnreadable, iter_suites
+from coverage_engine.results.scenario_result import CHECK_MARGIN_PROPERTY
 from coverage_engine.results.verdicts import FAILING, Verdict
 from coverage_engine.suffixes import SCE_SUFFIX
+
+#: The name a run's check margin (the ``check.margin`` property of its report) is read under, as a record value.
+MARGIN = "margin"
 
 #: The verdicts of a run that finished (a pending or skipped run says nothing about its variant).
 FINISHED = frozenset({Verdict.PASSED, *FAILING})
@@ -136,8 +142,24 @@ class _Sources:
         return source, proposal.round if proposal is not None else FIRST_ROUND
 
 
-def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: Sequence[str]) -> History:
+def _check_margin(folder: str | None) -> float | None:
+    """The check margin a run's own report holds (None without one)."""
+    if folder is None:
+        return None
+    try:
+        for suite in iter_suites(os.path.join(folder, RESULT_FILE)):
+            if CHECK_MARGIN_PROPERTY in suite.properties:
+                return numeric_value(float(suite.properties[CHECK_MARGIN_PROPERTY]))
+    except (OSError, JunitUnreadable, ValueError):
+        return None
+    return None
+
+
+def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: Sequence[str], *,
+                 margins: bool = False) -> History:
     """The runs of ``source`` (an ``.osc``) in the results ``folders``; ``keys`` are the variation's axes.
+    With ``margins``, a run's check margin (its report's ``check.margin``) is read as the record value
+    ``margin``, unless the scenario records an item of that name itself.
 
     Raises :class:`~coverage_engine.coverage.errors.ResultsError` for a folder that holds no results.
     """
@@ -158,6 +180,10 @@ def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: S
             unknown += 1
             continue
         records, samples = _item_values(run)
+        if margins and MARGIN not in records:
+            margin = _check_margin(run.folder)
+            if margin is not None:
+                records[MARGIN] = (margin,)
         for decl in run.items:
             if decl.kind == "cover" and decl.range is not None and not decl.is_cross:
                 covers.setdefault(decl.name, decl)

@@ -55,7 +55,7 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
                    seed: int, *, objective: str | None, maximise: bool, threshold: float | None,
                    resolution: float, round_number: int | None) -> AdaptiveRound:
     """Read the earlier runs, propose this round's points and plan them as variants; the estimate is printed."""
-    from coverage_engine.search.history import read_history
+    from coverage_engine.search.history import MARGIN, read_history
     from coverage_engine.search.propose import SearchOptions, propose_round
     from coverage_engine.variation.design import design_points
 
@@ -66,7 +66,8 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
         raise SearchError(f"--strategy {strategy} searches over the varied parameters, and {parsed.path.name} "
                           "varies none", where)
     space = space_of(parsed)
-    history = read_history(sources, parsed.path, space.keys)
+    margins = strategy == "falsify" and objective in (None, MARGIN)
+    history = read_history(sources, parsed.path, space.keys, margins=margins)
     options = SearchOptions(strategy, samples, seed, sources, objective, maximise, threshold, resolution,
                             round_number)
     proposal = propose_round(space, history, options)

@@ -14,6 +14,7 @@ from coverage_engine.coverage.values import ValueType
 from coverage_engine.domains import InputDomain
 from coverage_engine.proposals import SEARCH_FORMAT
 from coverage_engine.search.boundary import Observation, neighbour_pairs, propose_boundary
+from coverage_engine.search.errors import SearchError
 from coverage_engine.search.estimate import RoundRecord, estimate_lines, round_dict, write_round
 from coverage_engine.search.falsify import Scored, propose_falsify
 from coverage_engine.search.history import History, PastRun
@@ -163,3 +164,18 @@ def test_a_compare_check_says_how_far_it_was_from_flipping_relative_to_its_value
     assert check_margin(">", 0.0, 0.0) == 0.0
     assert check_margin("==", 1.0, 1.0) is None and check_margin("<", "a", "b") is None
     assert check_margin("<", True, 2) is None
+
+
+def test_boundary_with_a_threshold_splits_the_runs_by_a_record_value_instead_of_their_verdict():
+    space = Space((SPEED,))
+    runs = tuple(PastRun(f"r{i}", "passed", {"t.speed": 10.0 + 40.0 * u}, {"ttc": (3.0 - 4.0 * u,)})
+                 for i, u in enumerate([0.1, 0.3, 0.6, 0.9]))     # every run passed; ttc falls below 1 s past u = 0.5
+    options = SearchOptions("boundary", 1, 1, (), objective="ttc", threshold=1.0)
+    proposal = propose_round(space, History(runs), options)
+    axis = proposal.record.estimate.boundary.axes["t.speed"]
+    assert (axis.value, axis.error) == (28.0, 6.0) and proposal.record.objective == "ttc"
+    assert len(proposal.points) == 1 and 0.33 <= proposal.points[0][0] <= 0.57   # inside the pair, off its ends
+    verdicts = propose_round(space, History(runs), SearchOptions("boundary", 1, 1, ()))
+    assert verdicts.record.estimate.boundary.pairs == 0      # by verdict nothing flips
+    with pytest.raises(SearchError, match="--threshold needs --objective"):
+        propose_round(space, History(runs), SearchOptions("boundary", 1, 1, (), threshold=1.0))

@@ -59,7 +59,7 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
     from coverage_engine.search.propose import SearchOptions, propose_round
     from coverage_engine.variation.design import design_points
 
-    where = Location(str(parsed.path), 0, 0)
+    where = Location.whole_file(str(parsed.path))
     if samples is None:
         raise SearchError(f"--strategy {strategy} needs --samples N (how many variants to propose)", where)
     if not parsed.sizes:

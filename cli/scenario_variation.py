@@ -58,7 +58,8 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol", *
                    "not hold yet (a sampler continues its draw, a covering array its rows).")
 @click.option("--from", "from_results", multiple=True, type=click.Path(file_okay=False), metavar="RESULTS",
               help="Results folder of earlier runs of the same file (repeatable): boundary, fill-holes and falsify "
-                   "propose the next variants from them.")
+                   "propose the next variants from them. With --store on the command line, the batches of that "
+                   "store written into these folders are read instead (the folders need not be on this host).")
 @click.option("--objective", metavar="NAME",
               help="falsify: the record() item to minimise, or 'margin' (how close the compare checks came to "
                    "flipping; the default); boundary with --threshold: the record() item that crosses it.")
@@ -92,7 +93,7 @@ def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, 
             log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
             strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new,
             from_results=tuple(from_results), objective=objective, maximise=maximise, threshold=threshold,
-            resolution=resolution, round_number=round_number)
+            resolution=resolution, round_number=round_number, from_store=bool(from_results) and _store_named())
         if len(files) == 1:
             return run(request)
         try:                     # several files: each is done on its own; one that fails stops only itself
@@ -100,6 +101,13 @@ def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, 
         except (OscError, VariationStoreError, OSError) as exc:
             code = max(code, ctx.obj.report(exc))
     return code
+
+
+def _store_named() -> bool:
+    """Whether ``--store`` is on the command line: then ``--from`` is read from that store, as
+    ``scenario_coverage report RESULTS --store URL`` reads it (``$SCENARIO_STORE`` alone does not)."""
+    source = click.get_current_context().get_parameter_source("store_url")
+    return source is click.core.ParameterSource.COMMANDLINE
 
 
 def _scenario_files(given: tuple[str, ...]) -> list[str]:

@@ -14,14 +14,14 @@ folder was moved) counts when its assignment names every axis of the variation.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
 from coverage_engine.coverage.results_folder import read_results_folders
 from coverage_engine.coverage.run_records import ItemDecl
-from coverage_engine.coverage.runs import RunInput
+from coverage_engine.coverage.runs import RunInput, RunSource
 from coverage_engine.domains import HEADER_CHARS, InputDomain, numeric_value
 from coverage_engine.proposals import FIRST_ROUND, header_proposal
 from coverage_engine.results.files import RESULT_FILE
@@ -32,6 +32,9 @@ from coverage_engine.suffixes import SCE_SUFFIX
 
 #: The name a run's check margin (the ``check.margin`` property of its report) is read under, as a record value.
 MARGIN = "margin"
+
+#: Where a run's ``.sce`` came from: ``(real path of the source .osc or None when unknown, round)``.
+OriginOf = Callable[[str | None], tuple[str | None, int]]
 
 #: The verdicts of a run that finished (a pending or skipped run says nothing about its variant).
 FINISHED = frozenset({Verdict.PASSED, *FAILING})
@@ -92,7 +95,8 @@ def _item_values(run: RunInput) -> tuple[dict[str, tuple[float, ...]], dict[str,
     records: dict[str, tuple[float, ...]] = {}
     covers: dict[str, tuple[object, ...]] = {}
     unsampled = run.unsampled or tuple([] for _ in run.items)
-    for decl, samples, missed in zip(run.items, run.samples, unsampled, strict=False):
+    sampled = run.samples if run.single is None else [[value] for value in run.single]   # the store's one-each form
+    for decl, samples, missed in zip(run.items, sampled, unsampled, strict=False):
         values = list(samples) or list(missed)
         if decl.kind == "record":
             records[decl.name] = _numbers(values)
@@ -101,7 +105,7 @@ def _item_values(run: RunInput) -> tuple[dict[str, tuple[float, ...]], dict[str,
     return records, covers
 
 
-class _Sources:
+class SceOrigins:
     """What each ``.sce`` says: the ``.osc`` it came from and its round (each file read once)."""
 
     def __init__(self, roots: Sequence[str]) -> None:
@@ -155,6 +159,13 @@ def _check_margin(folder: str | None) -> float | None:
     return None
 
 
+def _assignment(run: RunInput) -> dict[str, object]:
+    """A run's varied values by key (the store keeps them as parameter names and values in that order)."""
+    if run.parameters and run.values is not None and len(run.values) == len(run.parameters):
+        return dict(zip(run.parameters, run.values, strict=True))
+    return dict(run.assignment)
+
+
 def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: Sequence[str], *,
                  margins: bool = False) -> History:
     """The runs of ``source`` (an ``.osc``) in the results ``folders``; ``keys`` are the variation's axes.
@@ -163,16 +174,23 @@ def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: S
 
     Raises :class:`~coverage_engine.coverage.errors.ResultsError` for a folder that holds no results.
     """
-    wanted = os.path.realpath(source)
     results = read_results_folders(list(folders))
     roots = [str(Path(folder).resolve()) for folder in folders]
-    sources = _Sources(roots)
+    return history_of(results, tuple(folders), source, keys, SceOrigins(roots).of, margins=margins)
+
+
+def history_of(results: RunSource, labels: tuple[str, ...], source: str | os.PathLike[str], keys: Sequence[str],
+               origin_of: OriginOf, *, margins: bool = False) -> History:
+    """The runs of ``source`` among ``results`` (read from folders or from the store: the same value either
+    way); ``labels`` name where they came from, ``origin_of`` says which ``.osc`` and round a run's ``.sce``
+    belongs to. ``keys`` and ``margins`` as for :func:`read_history`."""
+    wanted = os.path.realpath(source)
     runs: list[PastRun] = []
     others = unknown = 0
     covers: dict[str, ItemDecl] = {}
     for run in results.runs:
-        origin, round_number = sources.of(run.scenario_file)
-        assignment = dict(run.assignment)
+        origin, round_number = origin_of(run.scenario_file)
+        assignment = _assignment(run)
         if origin is not None and origin != wanted:
             others += 1
             continue
@@ -195,5 +213,5 @@ def read_history(folders: Sequence[str], source: str | os.PathLike[str], keys: S
     if unknown:
         notes.append(f"{unknown} run(s) whose variant cannot be read and whose assignment lacks a varied "
                      "parameter were left out")
-    return History(tuple(runs), tuple(folders), MappingProxyType(dict(results.domains)), tuple(notes),
+    return History(tuple(runs), labels, MappingProxyType(dict(results.domains)), tuple(notes),
                    MappingProxyType(covers))

@@ -84,8 +84,11 @@ class _StoreRuns:
             self.pending += 1
         folder = row.output_dir or None   # as recorded (on the host that ran it); links are not checked here
         if row.body is not None and row.schema_id is not None:
-            return self._recorded_run(row, verdict, folder, row.schema_id, row.body)
-        return self._folder_run(row, verdict, folder)
+            run = self._recorded_run(row, verdict, folder, row.schema_id, row.body)
+        else:
+            run = self._folder_run(row, verdict, folder)
+        run.scenario_file = row.scenario_path or None     # where a search reads the run's source and round
+        return run
 
     def _recorded_run(self, row: StoredRun, verdict: str, folder: str | None, schema_id: int, body: str) -> RunInput:
         """A job whose coverage the store holds: its body decoded against the shared declarations."""

@@ -38,6 +38,8 @@ class VariationRequest:
     resolution: float = DEFAULT_RESOLUTION
     #: The round written in each variant's proposal line; None: one more than the highest round read.
     round_number: int | None = None
+    #: Read ``from_results`` from the store (``store``): each names a batch by its output folder.
+    from_store: bool = False
 
     @property
     def adaptive(self) -> bool:
@@ -51,5 +53,6 @@ class VariationRequest:
                 "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
                 "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new,
                 **({"from": list(self.from_results), "objective": self.objective, "maximise": self.maximise,
-                    "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number}
+                    "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number,
+                    "from_store": self.from_store}
                    if self.adaptive else {})}

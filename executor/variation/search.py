@@ -53,8 +53,9 @@ def space_of(parsed: ParsedVariation) -> Space:
 
 def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: str, samples: int | None,
                    seed: int, *, objective: str | None, maximise: bool, threshold: float | None,
-                   resolution: float, round_number: int | None) -> AdaptiveRound:
-    """Read the earlier runs, propose this round's points and plan them as variants; the estimate is printed."""
+                   resolution: float, round_number: int | None, results_store: str | None = None) -> AdaptiveRound:
+    """Read the earlier runs (from the folders, or with ``results_store`` from the batches of that store written
+    into them), propose this round's points and plan them as variants; the estimate is printed."""
     from coverage_engine.search.history import MARGIN, read_history
     from coverage_engine.search.propose import SearchOptions, propose_round
     from coverage_engine.variation.design import design_points
@@ -67,7 +68,12 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
                           "varies none", where)
     space = space_of(parsed)
     margins = strategy == "falsify" and objective in (None, MARGIN)
-    history = read_history(sources, parsed.path, space.keys, margins=margins)
+    if results_store is not None:
+        from executor.variation.stored_results import read_stored_history
+
+        history = read_stored_history(results_store, sources, parsed.path, space.keys, margins=margins)
+    else:
+        history = read_history(sources, parsed.path, space.keys, margins=margins)
     options = SearchOptions(strategy, samples, seed, sources, objective, maximise, threshold, resolution,
                             round_number)
     proposal = propose_round(space, history, options)

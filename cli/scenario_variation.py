@@ -69,13 +69,19 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol", *
 @click.option("--resolution", type=click.FloatRange(min=0, max=1, min_open=True), default=DEFAULT_RESOLUTION,
               show_default=True, metavar="F",
               help="boundary: locate it to this fraction of each range.")
+@click.option("--pass-rate", type=click.FloatRange(min=0, max=1, min_open=True), metavar="R",
+              help="boundary: seek the level of --along KEY where the share of passing runs over the other "
+                   "parameters crosses R (e.g. 0.5), instead of where single runs flip.")
+@click.option("--along", metavar="KEY",
+              help="boundary with --pass-rate: the varied parameter (its key, or a dotted part of it) whose level "
+                   "is sought.")
 @click.option("--round", "round_number", type=click.IntRange(min=1), metavar="N",
               help="The round written in each variant's proposal line (default: one more than the highest read).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())
 @click.pass_context
 def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
             strategy, strength, samples, seed, wait, only_new, from_results, objective, maximise, threshold,
-            resolution, round_number):
+            resolution, pass_rate, along, round_number):
     """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
     folder: its .osc files).
 
@@ -93,7 +99,8 @@ def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, 
             log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
             strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new,
             from_results=tuple(from_results), objective=objective, maximise=maximise, threshold=threshold,
-            resolution=resolution, round_number=round_number, from_store=bool(from_results) and _store_named())
+            resolution=resolution, round_number=round_number, from_store=bool(from_results) and _store_named(),
+            pass_rate=pass_rate, along=along)
         if len(files) == 1:
             return run(request)
         try:                     # several files: each is done on its own; one that fails stops only itself

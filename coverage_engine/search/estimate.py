@@ -43,6 +43,26 @@ class AxisBoundary:
 
 
 @dataclass(frozen=True)
+class LevelRate:
+    """``--pass-rate``: one level run along the axis, its runs and passes, and the side of the rate it is
+    decided on (``above`` means at or above; None while its other cells could still tip it)."""
+
+    value: object
+    runs: int
+    passed: int
+    side: str | None
+
+
+@dataclass(frozen=True)
+class PassRateEstimate:
+    """``--pass-rate R --along KEY``: the rate, the axis, and what each level run so far gave."""
+
+    rate: float
+    along: str
+    levels: tuple[LevelRate, ...] = ()
+
+
+@dataclass(frozen=True)
 class BoundaryEstimate:
     """The boundary per axis (where it is one-dimensional), the runs beside it, and how many neighbouring
     pairs of runs disagree (``pairs``), of which ``located`` are within the resolution."""
@@ -51,6 +71,7 @@ class BoundaryEstimate:
     variants: tuple[Mapping[str, object], ...] = ()
     pairs: int = 0
     located: int = 0
+    pass_rate: PassRateEstimate | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +117,12 @@ def _number(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def _rate_dict(rates: PassRateEstimate) -> dict[str, Any]:
+    return {"rate": rates.rate, "along": rates.along,
+            "levels": [{"value": level.value, "runs": level.runs, "passed": level.passed, "side": level.side}
+                       for level in rates.levels]}
+
+
 def estimate_dict(estimate: Estimate) -> dict[str, Any]:
     boundary = estimate.boundary
     worst = estimate.worst
@@ -105,7 +132,8 @@ def estimate_dict(estimate: Estimate) -> dict[str, Any]:
             "axes": {key: {"value": _number(axis.value), "error": _number(axis.error), "unit": axis.unit}
                      for key, axis in boundary.axes.items()},
             "variants": [dict(v) for v in boundary.variants[:MAX_BOUNDARY_VARIANTS]],
-            "pairs": boundary.pairs, "located": boundary.located},
+            "pairs": boundary.pairs, "located": boundary.located,
+            **({} if boundary.pass_rate is None else {"pass_rate": _rate_dict(boundary.pass_rate)})},
         "worst": None if worst is None else {"objective": worst.objective, "value": _number(worst.value),
                                              "assignment": dict(worst.assignment), "failed": worst.failed},
         "holes": None if holes is None else {"targeted": holes.targeted, "guessed": holes.guessed},
@@ -134,6 +162,19 @@ def _assignment_text(assignment: Mapping[str, object]) -> str:
     return ", ".join(f"{key} = {_shown(value)}" for key, value in assignment.items())
 
 
+def _rate_lines(rates: PassRateEstimate) -> list[str]:
+    """The pass rate of each level run, and which side of the rate each is decided on."""
+    shown = f"{rates.rate * 100:.4g} %"
+    sides = {"above": f"at or above {shown}", "below": f"below {shown}", None: "not decided yet"}
+    parts = [f"{_shown(level.value)}: {level.passed} of {level.runs} passed ({sides[level.side]})"
+             for level in rates.levels]
+    lines = [f"pass rate along {rates.along}: " + ("; ".join(parts) if parts else "no run yet")]
+    if not any(level.side == "below" for level in rates.levels) or not any(level.side == "above"
+                                                                           for level in rates.levels):
+        lines.append(f"boundary: not seen yet (no level decided on each side of {shown})")
+    return lines
+
+
 def estimate_lines(record: RoundRecord) -> list[str]:
     """The estimate in a few lines, as the command prints it."""
     estimate = record.estimate
@@ -143,7 +184,9 @@ def estimate_lines(record: RoundRecord) -> list[str]:
         for key, axis in boundary.axes.items():
             unit = axis.unit
             lines.append(f"boundary: {key} = {axis.value:.4g}{unit} ± {axis.error:.2g}{unit}")
-        if not boundary.pairs:
+        if boundary.pass_rate is not None:
+            lines += _rate_lines(boundary.pass_rate)
+        elif not boundary.pairs:
             lines.append("boundary: not seen yet (no run failed, or none passed)")
         elif not boundary.axes:
             lines.append(f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located} of "

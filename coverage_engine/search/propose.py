@@ -11,14 +11,23 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from coverage_engine.coverage.run_records import ItemDecl
+from coverage_engine.domains import numeric_value
 from coverage_engine.proposals import FIRST_ROUND
 from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
 from coverage_engine.search.boundary import Observation, propose_boundary
 from coverage_engine.search.errors import SearchError
-from coverage_engine.search.estimate import Estimate, RoundRecord
+from coverage_engine.search.estimate import (
+    AxisBoundary,
+    BoundaryEstimate,
+    Estimate,
+    LevelRate,
+    PassRateEstimate,
+    RoundRecord,
+)
 from coverage_engine.search.falsify import MARGIN, Scored, propose_falsify
 from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.holes import propose_holes
+from coverage_engine.search.pass_rate import RateRun, propose_pass_rate
 from coverage_engine.search.space import Point, Space
 
 #: What a strategy's round gives: its points, its estimate and notes to print.
@@ -38,6 +47,9 @@ class SearchOptions:
     threshold: float | None = None
     resolution: float = DEFAULT_RESOLUTION
     round_number: int | None = None
+    #: boundary: the share of passing runs whose crossing along ``along`` is sought (None: pass vs fail per run).
+    pass_rate: float | None = None
+    along: str | None = None
 
 
 @dataclass(frozen=True)
@@ -65,20 +77,66 @@ def _value(run: PastRun, objective: str, maximise: bool) -> float | None:
     return max(values) if maximise else min(values)
 
 
+def _failing(run: PastRun, options: SearchOptions) -> bool | None:
+    """Which side of the boundary a run is on: failed, or its objective below the threshold (None: unknown)."""
+    if options.threshold is None:
+        return run.failed
+    assert options.objective is not None
+    value = _value(run, options.objective, False)
+    return None if value is None else value < options.threshold
+
+
 def _boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
+    if options.pass_rate is not None:
+        return _rate_boundary(space, placed, options)
     observations = []
     for run, point in placed:
-        if options.threshold is None:
-            failing = run.failed
-        else:
-            assert options.objective is not None
-            value = _value(run, options.objective, False)
-            if value is None:
-                continue
-            failing = value < options.threshold
-        observations.append(Observation(point, failing, run.assignment))
+        failing = _failing(run, options)
+        if failing is not None:
+            observations.append(Observation(point, failing, run.assignment))
     proposal = propose_boundary(space, observations, options.samples, options.resolution, options.seed)
     return proposal.points, Estimate(boundary=proposal.estimate, done=proposal.done), ()
+
+
+def along_axis(space: Space, along: str | None) -> int:
+    """The axis ``--along`` names: its key, or a dotted part of exactly one key (``noise`` for
+    ``nav.noise.parameter_value``)."""
+    if along is None:
+        raise SearchError("--pass-rate needs --along KEY: the varied parameter whose level the rate crosses at "
+                          f"(one of {', '.join(space.keys)})")
+    if along in space.keys:
+        return space.keys.index(along)
+    found = [i for i, key in enumerate(space.keys) if along in key.split(".")]
+    if len(found) != 1:
+        which = "names more than one" if found else "names none"
+        raise SearchError(f"--along {along} {which} of the varied parameters ({', '.join(space.keys)})")
+    return found[0]
+
+
+def _rate_boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
+    """``--pass-rate R --along KEY``: the level of KEY where the share of passing runs crosses R."""
+    assert options.pass_rate is not None
+    along = along_axis(space, options.along)
+    runs = []
+    for run, point in placed:
+        failing = _failing(run, options)
+        if failing is not None:
+            runs.append(RateRun(point, not failing))
+    proposal = propose_pass_rate(space, runs, along, options.pass_rate, options.samples, options.resolution,
+                                 options.seed)
+    found = proposal.boundary
+    key = space.keys[along]
+    levels = tuple(LevelRate(space.value_at(along, level.coordinate), level.runs, level.passed, level.decided)
+                   for level in found.levels)
+    axes = {}
+    if found.before is not None and found.after is not None:
+        low = numeric_value(space.value_at(along, found.before.coordinate))
+        high = numeric_value(space.value_at(along, found.after.coordinate))
+        if low is not None and high is not None:
+            axes[key] = AxisBoundary((low + high) / 2, abs(high - low) / 2, space.axes[along].unit)
+    estimate = BoundaryEstimate(axes, located=int(found.located),
+                                pass_rate=PassRateEstimate(options.pass_rate, key, levels))
+    return proposal.points, Estimate(boundary=estimate, done=found.located), ()
 
 
 def _falsify(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
@@ -120,6 +178,10 @@ def propose_round(space: Space, history: History, options: SearchOptions) -> Rou
         raise SearchError(f"'{options.strategy}' is not an adaptive strategy (one of {', '.join(ADAPTIVE)})")
     if options.threshold is not None and options.objective is None:
         raise SearchError("--threshold needs --objective NAME: the record() item whose values cross it")
+    if options.along is not None and options.pass_rate is None:
+        raise SearchError("--along goes with --pass-rate R: the rate whose crossing along it is sought")
+    if options.pass_rate is not None and options.strategy != "boundary":
+        raise SearchError(f"--pass-rate is an option of --strategy boundary, not of {options.strategy}")
     placed = _placed(space, history)
     if options.strategy == "boundary":
         points, estimate, notes = _boundary(space, placed, options)

@@ -141,7 +141,8 @@ def _search(parsed: ParsedVariation, request: VariationRequest, seed: int) -> Ad
     return adaptive_round(parsed, request.from_results, request.strategy, request.samples, seed,
                           objective=request.objective, maximise=request.maximise, threshold=request.threshold,
                           resolution=request.resolution, round_number=request.round_number,
-                          results_store=request.store if request.from_store else None)
+                          results_store=request.store if request.from_store else None,
+                          pass_rate=request.pass_rate, along=request.along)
 
 
 def _nothing_proposed(request: VariationRequest, search: AdaptiveRound) -> int:

@@ -38,6 +38,9 @@ class VariationRequest:
     resolution: float = DEFAULT_RESOLUTION
     #: The round written in each variant's proposal line; None: one more than the highest round read.
     round_number: int | None = None
+    #: boundary: the share of passing runs whose crossing along ``along`` (a varied parameter) is sought.
+    pass_rate: float | None = None
+    along: str | None = None
     #: Read ``from_results`` from the store (``store``): each names a batch by its output folder.
     from_store: bool = False
 
@@ -54,5 +57,5 @@ class VariationRequest:
                 "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new,
                 **({"from": list(self.from_results), "objective": self.objective, "maximise": self.maximise,
                     "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number,
-                    "from_store": self.from_store}
+                    "from_store": self.from_store, "pass_rate": self.pass_rate, "along": self.along}
                    if self.adaptive else {})}

@@ -53,7 +53,8 @@ def space_of(parsed: ParsedVariation) -> Space:
 
 def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: str, samples: int | None,
                    seed: int, *, objective: str | None, maximise: bool, threshold: float | None,
-                   resolution: float, round_number: int | None, results_store: str | None = None) -> AdaptiveRound:
+                   resolution: float, round_number: int | None, results_store: str | None = None, pass_rate: float | None = None,
+                   along: str | None = None) -> AdaptiveRound:
     """Read the earlier runs (from the folders, or with ``results_store`` from the batches of that store written
     into them), propose this round's points and plan them as variants; the estimate is printed."""
     from coverage_engine.search.history import MARGIN, read_history
@@ -75,7 +76,7 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
     else:
         history = read_history(sources, parsed.path, space.keys, margins=margins)
     options = SearchOptions(strategy, samples, seed, sources, objective, maximise, threshold, resolution,
-                            round_number)
+                            round_number, pass_rate, along)
     proposal = propose_round(space, history, options)
     for note in proposal.notes:
         echo(f"note: {note}")

@@ -13,7 +13,9 @@ round's variants)::
 
 ``axes`` is filled where the boundary is one-dimensional (one axis varies); ``variants`` lists the runs
 on either side of it, closer than the resolution; ``boundary`` also says how many neighbouring pairs of
-runs disagree (``pairs``) and how many of them are located (``located``). ``done`` says the goal is met: the boundary
+runs disagree (``pairs``) and how many of them are located (``located``); with ``--pass-rate`` it also holds
+``"pass_rate": {"rate": 0.5, "along": KEY, "levels": [{"value": V, "runs": 8, "passed": 3, "side": "below"}, ...]}``
+(``side``: ``above`` means at or above the rate, null while undecided). ``done`` says the goal is met: the boundary
 located to the resolution, a failing variant found, no hole left.
 """
 

@@ -13,8 +13,9 @@ Each round guesses where the rate crosses: the split of the ordered levels (and 
 rising along the axis) that agrees with every decided level and best fits the others' runs (each run scores
 ``passed - R`` on the side expected to be at or above the rate); with nothing to go on, the middle of the
 levels left (plain bisection), falling first. The levels on both sides of that split get runs on cells not run
-yet, first as many as could decide them on the side expected, then the rest; samples left open more levels
-between the decided ones nearest the split (spread out: a k-ary search). The boundary is
+yet, first as many as could decide them on the side expected, then the rest (runs at a level beside the
+split tell more than runs anywhere else). Before any level is decided, samples the two cannot take open more
+levels, spread out (a k-ary search of a wide axis); after, a round may propose fewer than its samples. The boundary is
 *located* when the two levels beside the split are decided and adjacent (listed values next to each other, or
 no further apart than ``--resolution`` along a continuous range, which is cut into levels that far apart).
 """
@@ -84,14 +85,18 @@ class _Cells:
     def key(self, point: Point) -> tuple[float, ...]:
         return tuple(round(u, 9) for i, u in enumerate(point) if i != self.along)
 
-    def fresh(self, coordinate: float, taken: set[tuple[float, ...]], count: int) -> list[Point]:
-        """Up to ``count`` points at ``coordinate`` on cells not in ``taken``, in a seeded random order."""
+    def fresh(self, coordinate: float, taken: set[tuple[float, ...]], count: int,
+              lean: dict[tuple[float, ...], int] | None = None) -> list[Point]:
+        """Up to ``count`` points at ``coordinate`` on cells not in ``taken``: those ``lean`` scores highest
+        first, in a seeded random order among equals."""
         dims = len(self.space.axes)
         if self.exact:
             grids = [[(j + 0.5) / (self.space.levels(i) or 1) for j in range(self.space.levels(i) or 1)]
                      for i in range(dims) if i != self.along]
             cells = [cell for cell in _product(grids) if tuple(round(u, 9) for u in cell) not in taken]
             self.rng.shuffle(cells)
+            if lean:
+                cells.sort(key=lambda cell: -lean.get(tuple(round(u, 9) for u in cell), 0))
             return [self._at(coordinate, cell) for cell in cells[:count]]
         points = []
         for _ in range(count):
@@ -203,8 +208,8 @@ def _spread(levels: Sequence[Level], t: int) -> list[int]:
 def _shares(levels: Sequence[Level], t: int, falling: bool, samples: int, rate: float,
             cells: int) -> list[tuple[int, int]]:
     """``(level, runs)`` for a round: the two levels beside the split get what could decide them, then their
-    cells left (the one whose rate so far is nearest ``rate`` first); samples still left open more levels
-    of the bracket, each with what could decide it."""
+    cells left (the one whose rate so far is nearest ``rate`` first, on a tie the one that needed more); before
+    any level is decided, samples still left open more levels of the bracket, each with what could decide it."""
     def room(j: int) -> int:
         return max(0, cells - levels[j].runs) if levels[j].decided is None else 0
 
@@ -221,14 +226,36 @@ def _shares(levels: Sequence[Level], t: int, falling: bool, samples: int, rate: 
             samples -= count
 
     beside = [t - 1, t]
+    first = {j: _to_decide(levels[j], expect_above(j), rate, cells) for j in beside}
     for j in beside:
-        give(j, _to_decide(levels[j], expect_above(j), rate, cells))
+        give(j, first[j])
     for j in sorted(beside, key=lambda j: (abs(levels[j].passed / levels[j].runs - rate) if levels[j].runs else 0,
-                                           levels[j].runs)):
+                                           -first[j])):
         give(j, room(j))
-    for j in _spread(levels, t):
+    for j in _spread(levels, t) if not any(level.decided for level in levels) else ():
         give(j, _to_decide(levels[j], expect_above(j), rate, cells))
     return sorted(shares.items())
+
+
+def _lean(runs: Sequence[RateRun], coordinates: Sequence[float], along: int, cells: _Cells, j: int, falling: bool,
+          expect_above: bool) -> dict[tuple[float, ...], int]:
+    """Which cells of level ``j`` to run first: those likeliest to decide it on the side expected. A cell that
+    passed further along the falling direction (where passing is harder) or failed before it (where it is
+    easier) hints at its verdict here; a level expected above runs the hinted passes first, one expected
+    below the hinted failures. Only the order changes: every verdict counted is a run's own."""
+    lean: dict[tuple[float, ...], int] = {}
+    for run in runs:
+        k = min(range(len(coordinates)), key=lambda i: abs(coordinates[i] - run.point[along]))
+        harder = k > j if falling else k < j
+        if run.passed and harder:
+            hint = 1
+        elif not run.passed and not harder and k != j:
+            hint = -1
+        else:
+            continue
+        key = cells.key(run.point)
+        lean[key] = lean.get(key, 0) + (hint if expect_above else -hint)
+    return lean
 
 
 def propose_pass_rate(space: Space, runs: Sequence[RateRun], along: int, rate: float, samples: int,
@@ -249,5 +276,6 @@ def propose_pass_rate(space: Space, runs: Sequence[RateRun], along: int, rate: f
         taken.setdefault(index, set()).add(cells.key(run.point))
     points: list[Point] = []
     for j, share in _shares(levels, t, falling, samples, rate, cells.count):
-        points += cells.fresh(coordinates[j], taken.get(j, set()), share)
+        lean = _lean(runs, coordinates, along, cells, j, falling, expect_above=(j < t) == falling)
+        points += cells.fresh(coordinates[j], taken.get(j, set()), share, lean)
     return RateProposal(tuple(points), boundary)

@@ -13,9 +13,10 @@ Each round guesses where the rate crosses: the split of the ordered levels (and 
 rising along the axis) that agrees with every decided level and best fits the others' runs (each run scores
 ``passed - R`` on the side expected to be at or above the rate); with nothing to go on, the middle of the
 levels left (plain bisection), falling first. The levels on both sides of that split get runs on cells not run
-yet, first as many as could decide them on the side expected, then the rest (runs at a level beside the
-split tell more than runs anywhere else). Before any level is decided, samples the two cannot take open more
-levels, spread out (a k-ary search of a wide axis); after, a round may propose fewer than its samples. The boundary is
+yet, as many as could decide them on the side expected. Before any level is decided, the samples left go to
+the rest of their cells and then open more levels, spread out (a k-ary search of a wide axis); after, a round
+proposes no more than could decide the two, fewer than its samples when that is less: a run spent where the
+guess is already settled tells nothing, and the next round guesses again from what these runs give. The boundary is
 *located* when the two levels beside the split are decided and adjacent (listed values next to each other, or
 no further apart than ``--resolution`` along a continuous range, which is cut into levels that far apart).
 """
@@ -207,9 +208,9 @@ def _spread(levels: Sequence[Level], t: int) -> list[int]:
 
 def _shares(levels: Sequence[Level], t: int, falling: bool, samples: int, rate: float,
             cells: int) -> list[tuple[int, int]]:
-    """``(level, runs)`` for a round: the two levels beside the split get what could decide them, then their
-    cells left (the one whose rate so far is nearest ``rate`` first, on a tie the one that needed more); before
-    any level is decided, samples still left open more levels of the bracket, each with what could decide it."""
+    """``(level, runs)`` for a round: the two levels beside the split get what could decide them; before any level
+    is decided, also their cells left (the one whose rate so far is nearest ``rate`` first, on a tie the one that
+    needed more), then more levels of the bracket, each with what could decide it."""
     def room(j: int) -> int:
         return max(0, cells - levels[j].runs) if levels[j].decided is None else 0
 
@@ -229,10 +230,12 @@ def _shares(levels: Sequence[Level], t: int, falling: bool, samples: int, rate: 
     first = {j: _to_decide(levels[j], expect_above(j), rate, cells) for j in beside}
     for j in beside:
         give(j, first[j])
+    if any(level.decided for level in levels):
+        return sorted(shares.items())
     for j in sorted(beside, key=lambda j: (abs(levels[j].passed / levels[j].runs - rate) if levels[j].runs else 0,
                                            -first[j])):
         give(j, room(j))
-    for j in _spread(levels, t) if not any(level.decided for level in levels) else ():
+    for j in _spread(levels, t):
         give(j, _to_decide(levels[j], expect_above(j), rate, cells))
     return sorted(shares.items())
 

@@ -14,6 +14,7 @@ import re
 import statistics
 from array import array
 from collections.abc import Hashable, Mapping
+from dataclasses import replace
 from itertools import islice
 
 from coverage_engine.coverage.buckets import Bucket
@@ -312,5 +313,8 @@ def build_report(source: RunSource, plan: CoveragePlan | None = None) -> Coverag
     finally:
         if collecting:
             gc.enable()
-    return grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
-                 root=source.root, warnings=source.warnings, domains=source.domains)
+    report = grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
+                   root=source.root, warnings=source.warnings, domains=source.domains)
+    if source.search is not None:
+        report = replace(report, search=source.search.section(source.domains))
+    return report

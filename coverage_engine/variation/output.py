@@ -54,7 +54,7 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         source_dir=relative_source_dir(plan.path.parent, output_dir), scenario=plan.scenario,
         chunks=list(plan.template.chunks), replacements=list(plan.template.replacements),
         keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note,
-        domains=plan_domains(plan))
+        domains=plan_domains(plan), proposal=plan.proposal)
 
 
 def plan_domains(plan: VariationPlan) -> list[InputDomain]:
@@ -224,8 +224,7 @@ class _Batch:
 def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Container[str] = (), *,
              record: Callable[[list[Generated]], None] | None = None,
              on_item: Callable[[Generated], None] | None = None,
-             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE,
-             held: Container[str] = frozenset(), first_index: int = 0) -> GenerationResult:
+             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE) -> GenerationResult:
     """Write every valid combination of ``plan`` to ``output_dir``, in batches.
 
     For each batch of up to ``batch_size`` valid variants, their files are written (each whole, see
@@ -244,10 +243,11 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     generation) that already holds exactly the new text is left untouched: regenerating the same input
     rewrites nothing (truncating files is slow on some file systems, and mtimes stay meaningful).
 
-    ``held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
+    ``plan.held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
     combination is passed over (counted in the result's ``held``), and the others are numbered from
-    ``first_index`` on without gaps.
+    ``plan.first_index`` on without gaps.
     """
+    held, first_index = plan.held, plan.first_index
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
     template = sce_template(plan, folder)

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
 from coverage_engine.suffixes import SCE_SUFFIX
+from coverage_engine.variation.strategies import COVERING
 from executor.output.terminal import printable
 from executor.variation import report
 from executor.variation.report import echo
@@ -36,9 +37,10 @@ from executor.variation.report import echo
 if TYPE_CHECKING:
     from sqlalchemy import Engine
 
+    from coverage_engine.variation.covering import TupleCoverage
     from coverage_engine.variation.output import Generated
-    from coverage_engine.variation.plan import Resolve, VariationPlan
-    from coverage_engine.variation.strategies import TupleCoverage
+    from coverage_engine.variation.plan import ParsedVariation, PlannedVariation, Resolve, VariationPlan
+    from coverage_engine.variation.strategies import StrategyOptions
     from store.variant_history import HeldVariants
 
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
@@ -105,8 +107,13 @@ class VariationRequest:
 
 
 def run(request: VariationRequest) -> int:
-    """Generate (or list) the variants of ``request.scenario``; returns the exit code."""
-    from coverage_engine.variation.plan import build_plan, check_plan
+    """Generate (or list) the variants of ``request.scenario``; returns the exit code.
+
+    The stages of :mod:`coverage_engine.variation` in order: parse, design (:func:`_design`), check,
+    choose (:func:`_choose`), then report and write (:func:`_write`).
+    """
+    from coverage_engine.variation import strategies
+    from coverage_engine.variation.plan import parse_variation
 
     try:
         request.scenario.encode("utf-8")
@@ -119,8 +126,6 @@ def run(request: VariationRequest) -> int:
             from coverage_engine.files.parameters import read_parameter_documents
 
             documents = read_parameter_documents(request.parameter_file)
-        from coverage_engine.variation import strategies
-
         seed = request.seed
         if seed is None and request.strategy != "full":
             import secrets
@@ -128,38 +133,13 @@ def run(request: VariationRequest) -> int:
             seed = secrets.randbelow(2**31)
             echo(f"seed {seed} (pass --seed {seed} to make the same variants again)")
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
-        covering = request.strategy in strategies.COVERING
-        limit = request.max_variants or DEFAULT_MAX_VARIANTS
+        parsed = parse_variation(Path(request.scenario), documents)
         engine = _open_store(request.store) if request.only_new else None
         held = None
-        draw = 1                       # a sampler draws more points when keep conditions reject some
-        while True:
-            plan = build_plan(Path(request.scenario), documents)
-            if engine is not None and held is None:
-                held = _held(plan, request, engine)
-                strategies.check_continuable(options, len(held.assignments), held.runs,
-                                             Location(str(plan.path), 0, 0))
-            strategies.draw_continuous(plan, strategies.oversampled(options, draw))
-            wanted = plan.total if draw == 1 else options.samples or 0
-            if wanted > limit and not covering:
-                raise TooManyVariants(
-                    f"{wanted} combinations ({report.slot_sizes(plan)}) are more than --max-variants ({limit}); "
-                    "nothing was written", Location(str(plan.path), 0, 0),
-                    hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
-                         f"{wanted} (one .sce file each, about {report.size_text(wanted * SCE_FILE_BYTES)} "
-                         "on disk)")
-            if covering and options.t <= len(plan.sizes):   # (a strength beyond the dimensions is said later)
-                strategies.refuse_oversized(plan, options, limit)    # before 2,000 values are checked
-            check_plan(plan, exclude=not covering)
-            if strategies.enough_samples(plan, options, draw):
-                break
-            draw *= 2
-        seeds = strategies.rows_of(plan, held.assignments) if held is not None and covering else ()
-        tuples = strategies.build_covering_array(plan, options, seeds, limit=limit,
-                                                 tick=report.Ticker("building the covering array")) \
-            if covering else None
-        plan.strategy_note = strategies.describe_options(options)
-        plan.design_samples = options.samples
+        if engine is not None:
+            held = _held(parsed, request, engine)
+            strategies.check_continuable(options, len(held.assignments), held.runs, Location(str(parsed.path), 0, 0))
+        plan, tuples = _choose(parsed, request, options, held)
         report.describe(plan)
         if request.strategy != "full":
             echo(_strategy_summary(plan, request, tuples))
@@ -183,6 +163,60 @@ def run(request: VariationRequest) -> int:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
         with lock:
             return _write(plan, request, engine or _open_store(request.store), seed, held, tuples)
+
+
+def _design(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
+            factor: int) -> PlannedVariation:
+    """The design stage: the points the request's strategy asks for (``factor`` x its samples for a sampler
+    redrawing after the keep conditions left out too many). An adaptive strategy plugs in here."""
+    from coverage_engine.variation.design import design
+
+    limit = request.max_variants or DEFAULT_MAX_VARIANTS
+    planned = design(parsed, options, factor)
+    wanted = planned.total if factor == 1 else options.samples or 0
+    if wanted > limit and options.strategy not in COVERING:
+        raise TooManyVariants(
+            f"{wanted} combinations ({report.slot_sizes(planned)}) are more than --max-variants ({limit}); "
+            "nothing was written", Location(str(parsed.path), 0, 0),
+            hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
+                 f"{wanted} (one .sce file each, about {report.size_text(wanted * SCE_FILE_BYTES)} "
+                 "on disk)")
+    return planned
+
+
+def _choose(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
+            held: HeldVariants | None) -> tuple[VariationPlan, TupleCoverage | None]:
+    """Design, check and choose: the plan to write, and for a covering array the tuples it covers.
+
+    A sampler whose draws the keep conditions thin out draws twice as many until ``--samples`` are left.
+    """
+    from coverage_engine.variation import strategies
+    from coverage_engine.variation.checking import check_values
+    from coverage_engine.variation.choice import choose_all, first_samples, only_new
+    from coverage_engine.variation.covering import choose_covering, refuse_oversized
+
+    limit = request.max_variants or DEFAULT_MAX_VARIANTS
+    covering = options.strategy in COVERING
+    tuples = None
+    factor = 1
+    while True:
+        planned = _design(parsed, request, options, factor)
+        if covering and options.t <= len(planned.sizes):   # (a strength beyond the dimensions is said later)
+            refuse_oversized(planned, options, limit)      # before 2,000 values are checked
+        checked = check_values(planned)
+        if covering:
+            seeds = strategies.rows_of(checked, held.assignments) if held is not None else ()
+            plan, tuples = choose_covering(checked, options, seeds, limit=limit,
+                                           tick=report.Ticker("building the covering array"))
+            break
+        chosen = first_samples(choose_all(checked), options, factor)
+        if chosen is not None:
+            plan = chosen
+            break
+        factor *= 2
+    if held is not None:
+        plan = only_new(plan, held.assignments, held.next_index)
+    return plan, tuples
 
 
 def _open_store(url: str | None) -> Engine:
@@ -211,7 +245,7 @@ def _strategy_summary(plan: VariationPlan, request: VariationRequest, tuples: Tu
     return text
 
 
-def _held(plan: VariationPlan, request: VariationRequest, engine: Engine) -> HeldVariants:
+def _held(plan: ParsedVariation, request: VariationRequest, engine: Engine) -> HeldVariants:
     """``--only-new``: what earlier runs of this source (path and text) wrote into the output folder."""
     from coverage_engine.variation.output import source_sha256
     from store.database import StoreError
@@ -240,7 +274,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
     output_dir = Path(request.output_dir)
     # Files of the new generation overwrite those of the same name in place (far cheaper than
     # delete + create on most file systems); the rest of the earlier generation is removed afterwards.
-    first = held.next_index if held is not None else 0     # --only-new numbers after the earlier runs
+    first = plan.first_index     # --only-new numbers after the earlier runs
     longest = f"{plan.path.stem}{max(first + plan.total - 1, 0)}{SCE_SUFFIX}"
     limit = _name_max(output_dir)
     if len(os.fsencode(longest)) > limit:
@@ -312,8 +346,7 @@ def _write(plan: VariationPlan, request: VariationRequest, engine: Engine, seed:
         with _StopRequest() as stop:
             try:
                 result = generate(plan, output_dir, existing=frozenset(old), record=record, on_item=on_item,
-                                  stop=stop, held=held.assignments if held is not None else frozenset(),
-                                  first_index=first)
+                                  stop=stop)
             except VariantWriteError as exc:
                 recorder.finish(complete=False)
                 cause = exc.cause

@@ -54,7 +54,8 @@ def search_html(section: SearchSection) -> str:
     rows = "".join(f'<tr><td><span class="dot" style="background:{round_colour(r.round)}"></span> {r.round}</td>'
                    f'<td>{escape(r.strategy)}</td><td class="num">{r.runs}</td><td class="num">{r.passed}</td>'
                    f'<td class="num">{r.not_passed}</td></tr>' for r in section.rounds)
-    estimate = "".join(f"<li>{escape(line)}</li>" for line in estimate_lines(section.estimate))
+    estimate = "".join(f'<li class="sub">{escape(line.strip())}</li>' if line.startswith(" ") else
+                       f"<li>{escape(line)}</li>" for line in estimate_lines(section.estimate))
     picture = search_svg(section) or ""
     return (f'<section class="group" id="search"><h2>{escape(search_head(section))}</h2>'
             '<p class="lead">Each round ran the variants its strategy proposed from the results of the rounds '

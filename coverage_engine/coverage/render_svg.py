@@ -62,6 +62,10 @@ class _Frame:
                      f'class="axisname">{escape(y_name)} →</text>')
         self.parts = parts
 
+    def inside(self, x: float, y: float) -> bool:
+        """Whether the point ``(x, y)`` lies within the two ranges (a mark outside them is not drawn)."""
+        return 0 <= (x - self.x_low) / self.x_span <= 1 and 0 <= (y - self.y_low) / self.y_span <= 1
+
     def sx(self, value: float) -> float:
         return LEFT + self.plot_w * (value - self.x_low) / self.x_span
 
@@ -131,7 +135,7 @@ def _search_marks(section: SearchSection, frame: _Frame, x_key: str, y_key: str)
         for variant in boundary.variants:
             values = dict(variant)
             x, y = values.get(x_key), values.get(y_key)
-            if isinstance(x, (int, float)) and isinstance(y, (int, float)):
+            if isinstance(x, (int, float)) and isinstance(y, (int, float)) and frame.inside(float(x), float(y)):
                 on_it.append((float(x), float(y), variant))
         on_it.sort(key=lambda p: (p[0], p[1]))
         if len(on_it) > 1:          # the boundary as a line through its variants, left to right
@@ -147,7 +151,7 @@ def _search_marks(section: SearchSection, frame: _Frame, x_key: str, y_key: str)
     if worst is not None:
         values = dict(worst.assignment)
         x, y = values.get(x_key), values.get(y_key)
-        if isinstance(x, (int, float)) and isinstance(y, (int, float)):
+        if isinstance(x, (int, float)) and isinstance(y, (int, float)) and frame.inside(float(x), float(y)):
             cx, cy = frame.sx(float(x)), frame.sy(float(y))
             tip = escape(f"worst case: {worst.objective} = {worst.value:.4g} at {assignment_text(worst.assignment)}")
             marks.append(f'<g class="worst"><title>{tip}</title><circle cx="{cx:.1f}" cy="{cy:.1f}" r="10" '

@@ -59,12 +59,14 @@ class RoundRun:
 
 def first_strategy(scenario: str, samples: int) -> str:
     """``full`` when no range is continuous and every combination fits in ``samples``, else the sampler."""
-    from coverage_engine.variation.plan import build_plan
+    import math
 
-    plan = build_plan(Path(scenario))
-    if any(dimension.continuous is not None for dimension in plan.dimensions):
+    from coverage_engine.variation.plan import parse_variation
+
+    parsed = parse_variation(Path(scenario))
+    if any(dimension.continuous is not None for dimension in parsed.dimensions):
         return FIRST_SAMPLER
-    return "full" if plan.total <= samples else FIRST_SAMPLER
+    return "full" if math.prod(parsed.sizes) <= samples else FIRST_SAMPLER
 
 
 def adaptive_ready() -> bool:

@@ -204,7 +204,8 @@ def parse_search_record(document: object) -> SearchRecord | None:
     if not isinstance(document, dict) or document.get("format") != SEARCH_FORMAT:
         return None
     number = document.get("round")
-    estimate = document.get("estimate") if isinstance(document.get("estimate"), dict) else {}
+    found = document.get("estimate")
+    estimate: dict[str, Any] = found if isinstance(found, dict) else {}
     sources = document.get("from")
     objective = document.get("objective")
     settings = document.get("settings")

@@ -329,10 +329,10 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
     if report.search is not None:           # right after the summary: what a search found comes first
         from coverage_engine.coverage.render_search import search_lines
 
-        lines = search_lines(report.search)
-        console.print(style.styled(lines[0], "bold"))
-        for line in lines[1:]:
-            console.print(Text(line))
+        head, *rows = search_lines(report.search)
+        console.print(style.styled(head, "bold"))
+        for row in rows:
+            console.print(Text(row))
         console.print()
     if any(i.graded for i in report.items):
         console.print(_overview(report, style))

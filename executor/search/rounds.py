@@ -11,12 +11,15 @@ is kept out of the search's output unless ``-d`` is given; their warnings and er
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from coverage_engine.search_record import RESULTS_FOLDER, VARIANTS_FOLDER, round_folder
+from coverage_engine.suffixes import SCE_SUFFIX
 from executor.batch import orchestration
 from executor.batch.errors import BatchError
 from executor.batch.progress import Reporter
@@ -85,12 +88,10 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
                             debug=request.debug)
     if not adaptive_ready():
         return base
-    extra: dict[str, object] = {"round_number": place.number}
+    extra: dict[str, Any] = {"round_number": place.number}
     if sources:
         extra.update(from_results=tuple(str(s) for s in sources), objective=settings.objective,
                      maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
-    import dataclasses
-
     return dataclasses.replace(base, **extra)
 
 
@@ -105,7 +106,7 @@ def write_variants(variation: VariationRequest, *, show: bool) -> None:
         code = run(variation)
     if code == EXIT_INTERRUPTED:
         raise SearchInterrupted(f"stopped while writing the variants of {place}")
-    if not any(name.endswith((".sce", ".osc")) for name in os.listdir(place)):
+    if not any(name.endswith(SCE_SUFFIX) for name in os.listdir(place)):
         raise BatchError(f"the variation wrote no variant into {place}: nothing to run"
                          + (f"\n{quiet.getvalue().strip()}" if quiet.getvalue().strip() else ""))
 

@@ -79,7 +79,7 @@ def first_samples(plan: VariationPlan, options: StrategyOptions, factor: int) ->
 def only_new(plan: VariationPlan, held: Collection[str], first_index: int) -> VariationPlan:
     """``--only-new``: the variants whose assignment (stored JSON text) is in ``held`` are passed over when
     written, and the others are numbered from ``first_index`` on without gaps."""
-    return advance(plan, VariationPlan, held=frozenset(held), first_index=first_index)
+    return advance(plan, VariationPlan, held=frozenset(held), first_index=first_index, adds_to_earlier=True)
 
 
 def plan_variation(path: str | Path, documents: list[dict] | None = None, *,

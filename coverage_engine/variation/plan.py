@@ -227,6 +227,8 @@ class VariationPlan(CheckedVariation):
     held: frozenset[str] = frozenset()
     #: The index of the first variant written (``--only-new`` numbers after the earlier runs).
     first_index: int = 0
+    #: ``--only-new``: the variants are added to the earlier runs' files, which none of them replaces.
+    adds_to_earlier: bool = False
 
     @property
     def excluded(self) -> int:

@@ -20,7 +20,7 @@ from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from cli.scenario_batch_execution import JobsType
 from executor.batch.errors import BatchError, BatchUsageError
-from executor.variation.generation import VariationStoreError
+from executor.variation.writing import VariationStoreError
 from store.database import StoreError, StoreMissing
 
 PROG = "scenario_search"

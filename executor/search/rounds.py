@@ -24,7 +24,8 @@ from executor.batch import orchestration
 from executor.batch.errors import BatchError
 from executor.batch.progress import Reporter
 from executor.search.request import SearchRequest
-from executor.variation.generation import EXIT_INTERRUPTED, VariationRequest
+from executor.variation.request import VariationRequest
+from executor.variation.writing import EXIT_INTERRUPTED
 from store.jobs import Batch, BatchOptions
 from store.queue import QueueStore
 from store.states import JobState

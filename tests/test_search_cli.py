@@ -17,6 +17,8 @@ from search_support import fails, round_runs, search_file, write_brake
 from store.queue import QueueStore
 from store.states import FINAL, JobState
 
+pytest_plugins = ["batch_stores"]
+
 BIN = Path(__import__("sys").executable).parent
 SEARCH = str(BIN / "scenario_search")
 
@@ -145,3 +147,19 @@ def test_each_job_runs_the_launched_command(tmp_path):
         store.close()
     log = next((tmp_path / "search" / "round1" / "results").glob("brake0/log.txt")).read_text(encoding="utf-8")
     assert "Executing scenario 'brake'" in log
+
+
+def test_a_search_queues_its_rounds_in_a_postgresql_store(tmp_path, pg_url):
+    write_brake(tmp_path)
+    done = search("brake.osc", "--budget", "4", "--round", "2", "-j", "2", "--seed", "9", "--store", pg_url,
+                  "-o", "search", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert not (tmp_path / ".scenario_store.db").exists()          # the rounds' queues are in PostgreSQL
+    store = QueueStore.open(pg_url)
+    try:
+        for number in (1, 2):
+            batch = store.latest_batch(output_dir=str((tmp_path / "search" / f"round{number}" / "results").resolve()))
+            assert batch is not None and len(store.jobs(batch.id)) == 2
+    finally:
+        store.close()
+    assert len(_check_verdicts(tmp_path / "search", 2)) == 4

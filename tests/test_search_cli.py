@@ -71,6 +71,14 @@ def test_a_search_in_a_folder_that_holds_one_is_refused(tmp_path):
     assert resumed.returncode == 2 and "--goal falsify (the search has boundary)" in resumed.stderr
 
 
+def test_a_scenario_that_does_not_parse_is_a_located_error_and_leaves_no_search(tmp_path):
+    (tmp_path / "bad.osc").write_text("scenario x:\n    speed: speed with:\n        keep(it in [5mps..nope])\n",
+                                      encoding="utf-8")
+    done = search("bad.osc", "-o", "s", cwd=tmp_path)
+    assert done.returncode == 1 and "bad.osc:3:27: error:" in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "s").exists()                   # nothing to --resume: run it again once it is fixed
+
+
 def _store_batches(folder: Path) -> dict[str, list]:
     """The jobs of each round's batch in the store of ``folder``, by round folder name."""
     store = QueueStore.open(f"sqlite:///{folder / '.scenario_store.db'}")

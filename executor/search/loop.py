@@ -84,6 +84,8 @@ def run_search(request: SearchRequest) -> int:
     from executor.batch.orchestration import output_folder
     from executor.output.folder_lock import FolderBusy, FolderLock
 
+    if not request.resume:           # a scenario that does not parse leaves no search behind to --resume
+        rounds.first_strategy(request.settings.scenario, request.settings.round_size)
     folder = Path(output_folder(request.output_dir))
     try:
         lock = FolderLock(folder, "scenario_search").acquire(request.wait, on_wait=say)

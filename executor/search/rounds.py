@@ -96,8 +96,9 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
     return dataclasses.replace(base, **extra)
 
 
-def write_variants(variation: VariationRequest, *, show: bool) -> None:
-    """Write the round's variants; its lines are shown only when ``show`` (``-d``)."""
+def write_variants(variation: VariationRequest, *, show: bool) -> int:
+    """Write the round's variants; returns how many ``.sce`` files the folder holds. The variation's own
+    lines are shown only when ``show`` (``-d``); when it wrote none they are said with the error."""
     from executor.variation.generation import run
 
     place = Path(variation.output_dir)
@@ -107,9 +108,19 @@ def write_variants(variation: VariationRequest, *, show: bool) -> None:
         code = run(variation)
     if code == EXIT_INTERRUPTED:
         raise SearchInterrupted(f"stopped while writing the variants of {place}")
-    if not any(name.endswith(SCE_SUFFIX) for name in os.listdir(place)):
-        raise BatchError(f"the variation wrote no variant into {place}: nothing to run"
-                         + (f"\n{quiet.getvalue().strip()}" if quiet.getvalue().strip() else ""))
+    written = sum(1 for name in os.listdir(place) if name.endswith(SCE_SUFFIX))
+    said = quiet.getvalue().strip()
+    if not written and not _goal_met(place):
+        raise BatchError(f"the variation wrote no variant into {place}: nothing to run" + (f"\n{said}" if said else ""))
+    return written
+
+
+def _goal_met(variants: Path) -> bool:
+    """Whether the round's estimate (its ``search.json``) says the goal is met."""
+    from coverage_engine.search_record import read_search_record
+
+    record = read_search_record(variants)
+    return record is not None and record.estimate.done
 
 
 def open_batch(store: QueueStore, request: SearchRequest, place: RoundPlace) -> Batch:

@@ -84,6 +84,10 @@ class Boundary:
 
     axes: tuple[BoundaryAxis, ...] = ()
     variants: tuple[Assignment, ...] = ()
+    #: Neighbouring pairs of runs that disagree, and how many of them are located to the resolution
+    #: (None when the file does not say).
+    pairs: int | None = None
+    located: int | None = None
 
 
 @dataclass(frozen=True)
@@ -166,7 +170,10 @@ def _boundary(value: object) -> Boundary | None:
             axes.append(BoundaryAxis(str(key), where, _number(axis.get("error")), unit if isinstance(unit, str) else ""))
     variants = value.get("variants")
     listed = tuple(_assignment(v) for v in variants) if isinstance(variants, list) else ()
-    return Boundary(tuple(axes), tuple(v for v in listed if v))
+    pairs, located = value.get("pairs"), value.get("located")
+    return Boundary(tuple(axes), tuple(v for v in listed if v),
+                    pairs if isinstance(pairs, int) and not isinstance(pairs, bool) else None,
+                    located if isinstance(located, int) and not isinstance(located, bool) else None)
 
 
 def _worst(value: object) -> WorstCase | None:
@@ -244,7 +251,9 @@ def estimate_document(estimate: Estimate) -> dict[str, Any]:
     return {
         "boundary": None if boundary is None else {
             "axes": {a.key: {"value": a.value, "error": a.error, "unit": a.unit} for a in boundary.axes},
-            "variants": [_assignment_dict(v) for v in boundary.variants]},
+            "variants": [_assignment_dict(v) for v in boundary.variants],
+            **({"pairs": boundary.pairs} if boundary.pairs is not None else {}),
+            **({"located": boundary.located} if boundary.located is not None else {})},
         "worst": None if worst is None else {"objective": worst.objective, "value": worst.value,
                                              "assignment": _assignment_dict(worst.assignment),
                                              "failed": worst.failed},
@@ -290,6 +299,13 @@ def axis_text(axis: BoundaryAxis) -> str:
     return f"{short_key(axis.key)} = {axis.value:.4g}{error}{unit}"
 
 
+def _pairs_text(boundary: Boundary) -> str:
+    """``boundary: 3 pair(s) of neighbouring runs disagree, 1 located``, or that none disagree yet."""
+    if not boundary.pairs:
+        return "boundary: not seen yet (no neighbouring runs disagree)"
+    return f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located or 0} located"
+
+
 def estimate_summary(estimate: Estimate) -> str:
     """The estimate on one line (for a progress line): the boundary, the worst case or the holes."""
     parts = []
@@ -298,6 +314,8 @@ def estimate_summary(estimate: Estimate) -> str:
         parts.append("boundary " + "; ".join(axis_text(a) for a in boundary.axes))
     elif boundary is not None and boundary.variants:
         parts.append(f"boundary: {len(boundary.variants)} variant(s) where pass turns to fail")
+    elif boundary is not None and boundary.pairs is not None:
+        parts.append(_pairs_text(boundary))
     if estimate.worst is not None:
         worst = estimate.worst
         parts.append(f"worst {worst.objective or 'value'} {worst.value:.4g}" + (" (failed)" if worst.failed else ""))
@@ -313,6 +331,8 @@ def estimate_lines(estimate: Estimate) -> list[str]:
     lines = []
     boundary = estimate.boundary
     if boundary is not None:
+        if boundary.pairs is not None and not boundary.axes:
+            lines.append(_pairs_text(boundary))
         for axis in boundary.axes:
             lines.append(f"boundary: {axis_text(axis)}")
         if boundary.variants and not boundary.axes:

@@ -186,5 +186,5 @@ def search_svg(section: SearchSection) -> str | None:
     legend = "".join(f'<span class="dot" style="background:{round_colour(n)}"></span><span>round {n}</span>'
                      for n in rounds)
     return (frame.svg("search", f"runs of the search over {x_name} and {y_name}, by round")
-            + f'<div class="heatlegend"><span>{len(section.points)} run(s): circles passed, squares did not; '
-              f'dashed: the boundary; ringed: the worst case</span>{legend}</div>')
+            + f'<div class="heatlegend">{legend}</div><p class="lead">{len(section.points)} run(s): circles passed, '
+              'squares did not; dashed: the boundary; ringed: the worst case.</p>')

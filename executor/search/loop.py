@@ -146,8 +146,9 @@ def _rounds(request: SearchRequest, folder: Path, record: SearchRecord, store: Q
                          round=place.number, strategy=strategy,
                          rounds=(*record.rounds, RoundSummary(place.number, strategy, ran.runs, ran.failed)))
         _save(folder, record)
+        basis = f"estimate from {record.runs_read} earlier run(s): " if estimate is not None and record.runs_read else ""
         say(f"round {place.number} ({strategy}): {ran.runs} run(s), {ran.failed} not passed; "
-            f"{used + ran.runs} of {settings.budget} run(s); {estimate_summary(record.estimate)}")
+            f"{used + ran.runs} of {settings.budget} run(s); {basis}{estimate_summary(record.estimate)}")
     _finish(record, folder)
     return EXIT_DONE
 

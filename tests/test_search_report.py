@@ -153,3 +153,29 @@ def test_the_html_report_draws_the_rounds_the_boundary_and_the_worst_case(search
         1 for _, _, s, g in round_runs(searched / "search/round2/results") if fails(s, g))),
         str(sum(1 for _, _, s, g in round_runs(searched / "search/round2/results") if fails(s, g)))]
     assert box is not None and box["width"] > 300
+
+
+def test_a_boundary_along_one_range_is_a_line_with_its_error_as_a_band(searched, tmp_path):
+    """A round's results folder whose estimate locates the boundary along the gap (one dimension)."""
+    results = tmp_path / "results"
+    shutil.copytree(searched / "search/round1/results", results)
+    along = dict(ROUND_TWO, round=1, strategy="boundary",
+                 estimate={"boundary": {"axes": {"brake.gap": {"value": 50.0, "error": 3.0, "unit": "m"}},
+                                        "variants": []}, "worst": None, "holes": None, "done": True})
+    (results / "search.json").write_text(json.dumps(along), encoding="utf-8")
+    done = coverage("html", "results", "-o", "one.html", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    with chromium_page(tmp_path / "one.html") as (page, problems, _):
+        band = page.locator("svg.search g.boundary rect")
+        line = page.locator("svg.search g.boundary line")
+        band_box, line_box = band.bounding_box(), line.bounding_box()
+        plot = page.locator("svg.search > rect").first.bounding_box()
+        tip = page.locator("svg.search g.boundary title").text_content() or ""
+        estimate = page.locator("#search ul.estimate li").all_inner_texts()
+    assert problems == []
+    assert band_box and line_box and plot
+    assert abs(band_box["width"] - plot["width"]) < 2 and band_box["height"] > 0     # across the speed range
+    middle = plot["y"] + plot["height"] * (1 - (50.0 - 20.0) / 60.0)                 # gap 50 m of 20..80 m
+    assert abs(line_box["y"] + line_box["height"] / 2 - middle) < 2
+    assert abs(band_box["height"] - plot["height"] * 6.0 / 60.0) < 2                 # ± 3 m
+    assert tip == "boundary: gap = 50 ± 3 m" and estimate == ["boundary: gap = 50 ± 3 m", "goal met"]

@@ -101,7 +101,7 @@ def _scenario_files(given: tuple[str, ...]) -> list[str]:
 
 def main(args: list[str] | None = None) -> None:
     """Console script entry point."""
-    Boundary("scenario_variation", runtime_errors=(VariationStoreError,)).main(command, args)
+    Boundary("scenario_variation").main(command, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

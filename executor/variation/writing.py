@@ -20,7 +20,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from coverage_engine.errors import OscError
+from coverage_engine.errors import OscError, UserError
 from coverage_engine.location import Location
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.output.terminal import printable
@@ -46,7 +46,7 @@ EXIT_INTERRUPTED = 130
 _KEPT = "files of the earlier generation were kept"
 
 
-class VariationStoreError(Exception):
+class VariationStoreError(UserError):
     """The store cannot be opened or written while recording a variation run."""
 
 

@@ -19,9 +19,6 @@ import click
 from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from cli.scenario_batch_execution import JobsType
-from executor.batch.errors import BatchError, BatchUsageError
-from executor.variation.writing import VariationStoreError
-from store.database import StoreError, StoreMissing
 
 PROG = "scenario_search"
 
@@ -118,8 +115,7 @@ def command(output_dir, goal, budget, round_size, slots, timeout, grace, retries
 
 def main(args: list[str] | None = None) -> None:
     """Console script entry point."""
-    Boundary(PROG, runtime_errors=(BatchError, StoreError, VariationStoreError),
-             usage_errors=(BatchUsageError, StoreMissing)).main(command, args)
+    Boundary(PROG).main(command, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -55,7 +55,7 @@ def refuse_oversized(parsed: ParsedVariation, options: StrategyOptions, limit: i
     tracks_tuples = options.t > 2 or constrained
     refused = covering_size.refusal(found, limit, tracks_tuples) if limit else None
     if refused is not None:
-        raise StrategyError(refused, Location(str(parsed.path), 0, 0),
+        raise StrategyError(refused, Location.whole_file(str(parsed.path)),
                             hint=covering_size.alternatives(found, limit or 0))
     return found
 

@@ -52,7 +52,7 @@ def design(parsed: ParsedVariation, options: StrategyOptions, factor: int = 1,
         raise StrategyError(f"--strategy {options.strategy} needs --samples N (how many variants to draw)")
     if not parsed.sizes:        # every point would be the same variant: N copies of the scenario
         raise StrategyError(f"--strategy {options.strategy} draws points over the varied parameters, and "
-                            f"{parsed.path.name} varies none; nothing to draw", Location(str(parsed.path), 0, 0),
+                            f"{parsed.path.name} varies none; nothing to draw", Location.whole_file(str(parsed.path)),
                             hint="vary a parameter (keep(it.x in [...]) or a range), or run the scenario as it is")
     columns = unit_columns(options.strategy, options.samples * factor, len(parsed.sizes), options.seed)
     return design_points(parsed, columns, note=note, samples=options.samples, proposal=proposal)

@@ -82,7 +82,7 @@ def run(request: VariationRequest) -> int:
         held = None
         if engine is not None:
             held = _held(parsed, request, engine)
-            strategies.check_continuable(options, len(held.assignments), held.runs, Location(str(parsed.path), 0, 0))
+            strategies.check_continuable(options, len(held.assignments), held.runs, Location.whole_file(str(parsed.path)))
         plan, tuples = _choose(parsed, request, options, held)
         report.describe(plan)
         if request.strategy != "full":
@@ -104,7 +104,7 @@ def run(request: VariationRequest) -> int:
             lock = FolderLock(request.output_dir, "scenario_variation").acquire(
                 request.wait, on_wait=lambda text: echo(text, err=True))
         except FolderBusy as exc:
-            raise OutputFolderBusy(f"{exc}; nothing was written", Location(str(plan.path), 0, 0)) from None
+            raise OutputFolderBusy(f"{exc}; nothing was written", Location.whole_file(str(plan.path))) from None
         with lock:
             return write_variants(plan, request, engine or _open_store(request.store), seed, tuples)
 
@@ -122,7 +122,7 @@ def _design(parsed: ParsedVariation, request: VariationRequest, options: Strateg
     if wanted > limit and options.strategy not in strategies.COVERING:
         raise TooManyVariants(
             f"{wanted} combinations ({report.slot_sizes(planned)}) are more than --max-variants ({limit}); "
-            "nothing was written", Location(str(parsed.path), 0, 0),
+            "nothing was written", Location.whole_file(str(parsed.path)),
             hint=f"list fewer values, or to generate them all anyway run again with --max-variants "
                  f"{wanted} (one .sce file each, about {report.size_text(wanted * SCE_FILE_BYTES)} "
                  "on disk)")

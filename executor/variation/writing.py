@@ -85,7 +85,7 @@ def write_variants(plan: VariationPlan, request: VariationRequest, engine: Engin
                 raise VariantsNotWritten(
                     f"{what}: {cause.strerror or cause}; {exc.recorded} of {plan.valid_count()} variant(s) were "
                     f"written (and recorded) before it stopped" + (f"; {_KEPT}" if old else ""),
-                    Location(str(plan.path), 0, 0),
+                    Location.whole_file(str(plan.path)),
                     hint="make room (or write to another folder with -o) and run again: the files written "
                          "now are replaced") from None
             recorder.finish(complete=not result.stopped and not plan.adds_to_earlier)
@@ -113,7 +113,7 @@ def _check_names(plan: VariationPlan, output_dir: Path) -> None:
         raise OutputNameTooLong(
             f"the variant files would be named up to '{longest[:40]}…{longest[-12:]}' ({len(os.fsencode(longest))} "
             f"bytes), longer than the {limit} bytes a file name may have in {output_dir}/; nothing was written",
-            Location(str(plan.path), 0, 0), hint="give the .osc file a shorter name")
+            Location.whole_file(str(plan.path)), hint="give the .osc file a shorter name")
 
 
 def _earlier_files(plan: VariationPlan, output_dir: Path, adding: bool) -> dict[str, Path]:
@@ -135,7 +135,7 @@ def _earlier_files(plan: VariationPlan, output_dir: Path, adding: bool) -> dict[
         raise ForeignFilesInOutput(
             f"{output_dir}/ holds {len(foreign)} file(s) named like variants of {plan.path.name} that "
             f"scenario_variation did not generate from it ({shown}); nothing was written",
-            Location(str(plan.path), 0, 0),
+            Location.whole_file(str(plan.path)),
             hint="move those files away, or write the variants to another folder with -o")
     old = {p.name: p for p in survey.earlier}
     others = _other_sce_files(output_dir, set(old))

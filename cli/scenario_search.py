@@ -31,7 +31,7 @@ DEFAULT_ROUND = 40
 
 #: The settings --resume compares with the search's own (the click parameters share these names).
 SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objective", "maximise", "threshold",
-                   "resolution")
+                   "resolution", "command", "timeout", "grace", "retries", "simulation")
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
@@ -63,7 +63,9 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
               help="boundary: the value of --objective where pass turns to fail (default: the verdicts).")
 @click.option("--resolution", type=click.FloatRange(min=0, min_open=True, max=1), default=0.01, show_default=True,
               metavar="F", help="boundary: how finely to locate it, as a share of each range.")
-@click.option("--resume", is_flag=True, help="Continue the search of -o where it stopped (Ctrl-C, a lost machine).")
+@click.option("--resume", is_flag=True,
+              help="Continue the search of -o where it stopped (Ctrl-C, a lost machine), with the scenario, goal, "
+                   "seed, command and job limits it was started with (a larger --budget runs more rounds).")
 @click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat before another worker may take it.")
 @click.option("--wait", is_flag=True, help="When another search uses -o, wait for it instead of stopping.")
@@ -103,13 +105,13 @@ def command(output_dir, goal, budget, round_size, slots, timeout, grace, retries
         seed = secrets.randbelow(2**31)
     settings = SearchSettings(scenario=os.path.abspath(scenario) if scenario else "", goal=goal, budget=budget,
                               round_size=round_size, seed=seed or 0, objective=objective, maximise=maximise,
-                              threshold=threshold, resolution=resolution)
+                              threshold=threshold, resolution=resolution, command=tuple(command),
+                              timeout=timeout, grace=grace, retries=retries, simulation=simulation)
     ctx = click.get_current_context()
     typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)
     given = tuple(name for name in SETTING_OPTIONS if ctx.get_parameter_source(name) in typed)
-    request = SearchRequest(settings=settings, output_dir=output_dir, slots=slots, timeout=timeout, grace=grace,
-                            retries=retries, simulation=simulation, lease=lease, command=tuple(command),
-                            store=store_url, resume=resume, wait=wait, debug=debug, typed=given)
+    request = SearchRequest(settings=settings, output_dir=output_dir, slots=slots, lease=lease, store=store_url,
+                            resume=resume, wait=wait, debug=debug, typed=given)
     return run_search(request)
 
 

@@ -138,10 +138,12 @@ def test_ctrl_c_mid_round_then_resume_records_every_run_once(tmp_path):
     assert [(r["round"], r["runs"]) for r in search_file(tmp_path / "search")["rounds"]] == [(1, 6), (2, 6)]
 
 
-def test_each_job_runs_the_launched_command(tmp_path):
+def test_each_job_runs_the_launched_command_also_after_resume(tmp_path):
     write_brake(tmp_path)
-    done = search("brake.osc", "--budget", "4", "--round", "2", "--seed", "5", "-o", "search", "--",
-                  str(BIN / "scenario_execution"), "{SCENARIO}", "-o", "{OUTPUT_DIR}", cwd=tmp_path)
+    first = search("brake.osc", "--budget", "2", "--round", "2", "--seed", "5", "-o", "search", "--",
+                   str(BIN / "scenario_execution"), "{SCENARIO}", "-o", "{OUTPUT_DIR}", cwd=tmp_path)
+    assert first.returncode == 0 and "search done: 2 run(s) in 1 round(s)" in first.stdout, first.stderr
+    done = search("--resume", "--budget", "4", "-o", "search", cwd=tmp_path)   # a larger budget: one more round
     assert done.returncode == 0, done.stdout + done.stderr
     assert "search done: 4 run(s) in 2 round(s)" in done.stdout
     assert "Executing scenario" not in done.stdout        # -j 1: the children's output is not the search's

@@ -1,9 +1,9 @@
 """One ``scenario_search`` call as a value, and the part of it a search keeps for ``--resume``.
 
 A search runs for minutes to hours; Ctrl-C and ``--resume`` must continue it exactly as it was started
-(the same scenario, goal, seeds and round sizes), so those settings are written into the search's
-``search.json`` before the first round and read back by ``--resume``. How the jobs run (``-j``,
-``--timeout``, the command) is the batch's business: a resumed batch keeps its own.
+(the same scenario, goal, seeds and round sizes, and its later rounds' jobs run by the same command with
+the same limits), so those settings are written into the search's ``search.json`` before the first
+round and read back by ``--resume``. How many jobs run at once (``-j``) is the resuming host's choice.
 """
 
 from __future__ import annotations
@@ -28,16 +28,28 @@ class SearchSettings:
     maximise: bool = False
     threshold: float | None = None
     resolution: float = 0.01
+    #: How each round's jobs run: the launch command (empty: the built-in runner) and the batch's limits.
+    command: tuple[str, ...] = ()
+    timeout: float | None = None
+    grace: float = 5.0
+    retries: int = 0
+    simulation: str | None = None
 
     def document(self) -> dict[str, Any]:
         """The settings as the ``settings`` object of ``search.json``."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        document = {f.name: getattr(self, f.name) for f in fields(self)}
+        document["command"] = list(self.command)
+        return document
 
     @classmethod
     def from_document(cls, document: Mapping[str, Any]) -> SearchSettings | None:
         """The settings kept in a ``search.json`` (None when they are missing or malformed)."""
         known = {f.name for f in fields(cls)}
         values = {k: v for k, v in document.items() if k in known}
+        command = values.get("command", [])
+        if not isinstance(command, list) or not all(isinstance(part, str) for part in command):
+            return None
+        values["command"] = tuple(command)
         try:
             settings = cls(**values)
         except TypeError:
@@ -56,12 +68,7 @@ class SearchRequest:
     settings: SearchSettings
     output_dir: str
     slots: int = 1
-    timeout: float | None = None
-    grace: float = 5.0
-    retries: int = 0
-    simulation: str | None = None
     lease: float = 60.0
-    command: tuple[str, ...] = ()
     store: str | None = None
     resume: bool = False
     wait: bool = False
@@ -78,7 +85,7 @@ def resumed(request: SearchRequest, kept: SearchSettings) -> SearchRequest:
     """``request`` with the settings of the search it resumes; a typed setting that differs is refused
     (except the budget), as ``scenario_batch_execution --resume`` refuses options that differ."""
     given = request.settings
-    differences = [f"--{name.replace('_', '-')} {getattr(given, name)} (the search has {getattr(kept, name)})"
+    differences = [f"{_flag(name)} {_shown(getattr(given, name))} (the search has {_shown(getattr(kept, name))})"
                    for name in request.typed
                    if name not in RESUMABLE_CHANGES and getattr(given, name) != getattr(kept, name)]
     if differences:
@@ -86,3 +93,14 @@ def resumed(request: SearchRequest, kept: SearchSettings) -> SearchRequest:
                               "these out or start a new search in another folder: " + "; ".join(differences))
     settings = replace(kept, budget=given.budget) if "budget" in request.typed else kept
     return replace(request, settings=settings)
+
+
+def _flag(name: str) -> str:
+    return {"scenario": "SCENARIO", "command": "the command", "round_size": "--round"}.get(
+        name, "--" + name.replace("_", "-"))
+
+
+def _shown(value: object) -> str:
+    if isinstance(value, tuple):
+        return " ".join(value) if value else "none (the built-in runner)"
+    return str(value)

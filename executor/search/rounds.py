@@ -124,12 +124,13 @@ def _goal_met(variants: Path) -> bool:
 
 
 def open_batch(store: QueueStore, request: SearchRequest, place: RoundPlace) -> Batch:
-    """The batch of the round's variants (a new one), run as the search's options say."""
+    """The batch of the round's variants (a new one), run as the search's settings say."""
+    settings = request.settings
     batch_request = orchestration.BatchRequest(
         input_dir=str(place.variants), output_dir=orchestration.output_folder(str(place.results)),
-        command=request.command,
-        options=BatchOptions(timeout=request.timeout, retries=request.retries, grace=request.grace,
-                             simulation=request.simulation))
+        command=settings.command,
+        options=BatchOptions(timeout=settings.timeout, retries=settings.retries, grace=settings.grace,
+                             simulation=settings.simulation))
     return orchestration.create_batch(store, batch_request)
 
 

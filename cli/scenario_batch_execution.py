@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import click
 
@@ -26,11 +28,19 @@ from executor.batch.errors import BatchError, BatchUsageError
 from executor.output.terminal import printable
 from store.database import StoreError, StoreMissing
 
+if TYPE_CHECKING:
+    from executor.batch.flaky import VariantRecord
+    from executor.batch.inputs import Shard
+    from executor.output.folder_lock import FolderLock
+    from store.jobs import Batch
+    from store.queue import QueueStore
+
 PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
 
-def _count(kind: click.ParamType, text: str, given: object, other: str, param, ctx) -> int:
+def _count(kind: click.ParamType, text: str, given: object, other: str, param: click.Parameter | None,
+           ctx: click.Context | None) -> int:
     """``text`` as a whole number of at least 1; else the option's usage error (``other``: the other form
     the option takes)."""
     try:
@@ -47,7 +57,7 @@ class JobsType(click.ParamType):
 
     name = "N|auto"
 
-    def convert(self, value, param, ctx):
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> int:
         if isinstance(value, int):
             return value
         if str(value).lower() == "auto":
@@ -62,14 +72,14 @@ class ShardType(click.ParamType):
 
     name = "i/N"
 
-    def convert(self, value, param, ctx):
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> Shard:
         from executor.batch.errors import BadShard
         from executor.batch.inputs import Shard
 
-        if not isinstance(value, str):
+        if isinstance(value, Shard):
             return value
         try:
-            return Shard.parse(value)
+            return Shard.parse(str(value))
         except BadShard as exc:
             self.fail(str(exc).removeprefix("--shard "), param, ctx)
 
@@ -80,7 +90,8 @@ class RepeatType(click.ParamType):
 
     name = "N|until-fail:N"
 
-    def convert(self, value, param, ctx):
+    def convert(self, value: object, param: click.Parameter | None,
+                ctx: click.Context | None) -> tuple[int, bool]:
         if isinstance(value, tuple):
             return value
         text = str(value).strip()
@@ -89,7 +100,7 @@ class RepeatType(click.ParamType):
         return _count(self, number, value, "'until-fail:N'", param, ctx), until_fail
 
 
-def _check_command(command) -> None:
+def _check_command(command: Sequence[str]) -> None:
     """The launch command's form (not empty, both placeholders) is checked before anything is touched."""
     from executor.batch.errors import BadCommand
     from executor.batch.inputs import check_command
@@ -100,7 +111,7 @@ def _check_command(command) -> None:
         raise click.UsageError(str(exc)) from exc
 
 
-def _open_store(url, *, existing: bool = False):
+def _open_store(url: str | None, *, existing: bool = False) -> QueueStore:
     """The store at ``url``; ``existing``: it must exist already and is neither created nor migrated."""
     from store.queue import QueueStore
 
@@ -121,7 +132,7 @@ def _typed_options() -> list[str]:
     return given
 
 
-def _check_post_run(hooks) -> None:
+def _check_post_run(hooks: Sequence[str]) -> None:
     """Each ``--post-run`` must split into a command line (an empty one would run the job folder)."""
     from executor.children.hooks import split_hook
 
@@ -177,9 +188,11 @@ def _check_post_run(hooks) -> None:
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
-def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, only_new, repeat,
-                pass_rate, store_url, debug, command):
+def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, slots: int, timeout: float | None,
+                grace: float, retries: int, resume: bool, shard: Shard | None, halt_on_failure: bool,
+                ignore_return_value: bool, post_run: tuple[str, ...], enqueue_only: bool, lease: float, wait: bool,
+                simulation: str | None, rerun_failed: bool, only_new: bool, repeat: tuple[int, bool],
+                pass_rate: float, store_url: str | None, debug: bool, command: tuple[str, ...]) -> int:
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -293,7 +306,8 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
               help="Seconds between looks at an empty queue.")
 @click.option("--wait", "wait_for_work", is_flag=True, help="Keep waiting for new batches (a long-lived pod).")
 @debug_option
-def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_for_work, debug):
+def worker_command(store_url: str | None, slots: int, batch_id: int | None, output_root: str | None, lease: float,
+                   poll: float, wait_for_work: bool, debug: bool) -> int:
     """Run queued jobs of the shared store until none is left."""
     from executor.batch.orchestration import EXIT_INTERRUPTED, run_worker
     from executor.batch.progress import PlainReporter
@@ -317,7 +331,7 @@ def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_fo
     return EXIT_INTERRUPTED.get(signum, 0) if signum is not None else 0
 
 
-def _pick_batch(store, batch_id):
+def _pick_batch(store: QueueStore, batch_id: int | None) -> Batch:
     if batch_id is not None:
         return store.batch(batch_id)
     batch = store.latest_batch()
@@ -334,7 +348,8 @@ def _pick_batch(store, batch_id):
                    "variants (passed and failed, in this batch's attempts or the store's earlier batches).")
 @click.option("--json", "as_json", is_flag=True, help="Print the status (and the --list) as JSON, for scripts.")
 @debug_option
-def status_command(store_url, batch_id, list_state, as_json, debug):
+def status_command(store_url: str | None, batch_id: int | None, list_state: str | None, as_json: bool,
+                   debug: bool) -> int:
     """Show jobs per state, running jobs per worker and host, and an ETA."""
     from executor.batch.failure_summary import not_passed_in_store
     from executor.batch.status import render, snapshot
@@ -379,7 +394,7 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
               help="File for the merged JUnit report ('-': standard output).")
 @click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option
-def report_command(store_url, batch_id, output, as_json, debug):
+def report_command(store_url: str | None, batch_id: int | None, output: str, as_json: bool, debug: bool) -> int:
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
     from executor.batch import orchestration
 
@@ -409,7 +424,7 @@ def report_command(store_url, batch_id, output, as_json, debug):
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
 
 
-def _lock_output(folder: str, wait: bool):
+def _lock_output(folder: str, wait: bool) -> FolderLock:
     """Hold the output folder's lock (executor.output.folder_lock) for the run, or say who holds it."""
     from executor.output.folder_lock import FolderBusy, FolderLock
 
@@ -421,7 +436,7 @@ def _lock_output(folder: str, wait: bool):
         raise BatchError(f"cannot use the output folder {folder}: {exc.strerror or exc}") from None
 
 
-def _flaky_records(store, batch):
+def _flaky_records(store: QueueStore, batch: Batch) -> list[VariantRecord]:
     """The flaky variants of ``batch`` with their passes and failures over the store's batches up to it."""
     from executor.batch.flaky import variant_records
 
@@ -429,7 +444,7 @@ def _flaky_records(store, batch):
     return [record for record in records.values() if record.flaky]
 
 
-def _print_failures(store, batch) -> None:
+def _print_failures(store: QueueStore, batch: Batch) -> None:
     """The failures grouped by kind (the triage), then the short summary of the jobs of the folder whose
     latest verdict is not a pass (nothing when all passed)."""
     from executor.batch.failure_summary import not_passed_in_folder, summary_lines, triage

@@ -54,8 +54,9 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
                    "not hold yet (a sampler continues its draw, a covering array its rows).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())
 @click.pass_context
-def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
-            strategy, strength, samples, seed, wait, only_new):
+def command(ctx: click.Context, scenarios: tuple[str, ...], output_dir: str, debug: bool, log_model: bool,
+            list_only: bool, store_url: str | None, scenario_parameter_file: str | None, max_variants: int,
+            strategy: str, strength: int, samples: int | None, seed: int | None, wait: bool, only_new: bool) -> int:
     """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
     folder: its .osc files).
 

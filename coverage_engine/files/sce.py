@@ -45,6 +45,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from coverage_engine.domains import InputDomain, header_domains
 from coverage_engine.errors import SceFormatError
@@ -139,7 +140,7 @@ def is_sce_text(head: str) -> bool:
     return head.startswith(SCE_MAGIC)
 
 
-def _load_yaml(text: str, path: str):
+def _load_yaml(text: str, path: str) -> Any:
     import yaml
 
     from coverage_engine.yaml_bounds import (

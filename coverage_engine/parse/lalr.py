@@ -7,13 +7,19 @@ is built. A parse failure is a :class:`ParseFailure` carrying the parser state, 
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
 from coverage_engine.parse.tables import tables
+
+if TYPE_CHECKING:   # the lexer imports ParseFailure from here
+    from coverage_engine.parse.lexer import Token
 
 
 class ParseFailure(Exception):
     """Raised by the lexer or driver: ``token`` (or a bad character at ``pos``) in parser ``state``."""
 
-    def __init__(self, state: int, expected: set[str], token=None, pos: int = 0, line: int = 1,
+    def __init__(self, state: int, expected: set[str], token: Token | _EndToken | None = None, pos: int = 0, line: int = 1,
                  column: int = 1) -> None:
         super().__init__("parse failure")
         self.state, self.expected, self.token = state, expected, token
@@ -25,7 +31,7 @@ class _EndToken:
 
     type = "$END"
 
-    def __init__(self, last) -> None:
+    def __init__(self, last: Token | None) -> None:
         self.value = ""
         self.line = getattr(last, "end_line", 1) or 1
         self.column = getattr(last, "end_column", 1) or 1
@@ -61,7 +67,7 @@ def _splice(inline: tuple[bool, ...], children: list[object]) -> _Inline:
     return spliced
 
 
-def run(tokens, builder, state_box: list[int]) -> object:
+def run(tokens: Iterable[Token], builder: object, state_box: list[int]) -> object:
     """Drive the LALR table over ``tokens`` calling ``builder.<rule>(children)`` on each reduction.
 
     ``state_box[0]`` always holds the current state, so the lexer can read which keywords the parser

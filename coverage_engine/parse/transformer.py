@@ -10,11 +10,13 @@ so they can be refused by name (``cover``, ``on @event``, ``sample`` …) raise
 
 from __future__ import annotations
 
+from typing import Any, NoReturn
+
 from coverage_engine.errors import OscSyntaxError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
-from coverage_engine.parse.transformer_expr import BehaviorExpressionRules
+from coverage_engine.parse.transformer_expr import BehaviorExpressionRules, Children
 
 #: Member statements that declare coverage items rather than apply a modifier.
 COVERAGE_MEMBERS = ("cover", "record")
@@ -25,12 +27,12 @@ class SyntaxBuilder(BehaviorExpressionRules):
 
     # ------------------------------------------------------------------ file level
 
-    def start(self, children):
+    def start(self, children: Children) -> s.CompilationUnit:
         imports = tuple(c for c in children if isinstance(c, s.Import))
         decls = tuple(c for c in children if not isinstance(c, (s.Import, Token)))
         return s.CompilationUnit(self.file, imports, decls, self.text)
 
-    def import_stmt(self, children):
+    def import_stmt(self, children: Children) -> s.Import:
         ref = children[1]
         if isinstance(ref, Token):
             from coverage_engine.parse.strings import unescape_string
@@ -38,15 +40,15 @@ class SyntaxBuilder(BehaviorExpressionRules):
             return s.Import(unescape_string(str(ref)), True, self.loc(children))
         return s.Import(ref.dotted, False, self.loc(children))
 
-    def qualified_name(self, children):
+    def qualified_name(self, children: Children) -> s.QualifiedName:
         if len(children) == 1:
             return s.QualifiedName((self.name(children[0]),), self.tloc(children[0]))
         return s.QualifiedName(tuple(self.name(t) for t in children if t.type == "NAME"), self.loc(children))
 
-    def namespace_decl(self, children):
+    def namespace_decl(self, children: Children) -> NoReturn:
         raise self.unsupported("namespaces", children[0])
 
-    def physical_type_decl(self, children):
+    def physical_type_decl(self, children: Children) -> s.PhysicalTypeDecl:
         name, args = children[1], children[5]
         exps = []
         for arg_name, value, loc in args:
@@ -56,7 +58,7 @@ class SyntaxBuilder(BehaviorExpressionRules):
             exps.append((arg_name, self.exponent(value, loc)))
         return s.PhysicalTypeDecl(self.name(name), tuple(exps), self.loc(children))
 
-    def unit_decl(self, children):
+    def unit_decl(self, children: Children) -> s.UnitDecl:
         name, type_name, args = children[1], children[3], children[7]
         exps, factor, offset = [], None, None
         for arg_name, value, loc in args:
@@ -74,13 +76,13 @@ class SyntaxBuilder(BehaviorExpressionRules):
             raise OscSyntaxError("an SI exponent must be an integer", loc, self.source_line(loc.line))
         return value
 
-    def si_args(self, children):
+    def si_args(self, children: Children) -> list[tuple[str, int | float, Location]]:
         return [c for c in children if not isinstance(c, Token)]
 
-    def si_arg(self, children):
+    def si_arg(self, children: Children) -> tuple[str, int | float, Location]:
         return (self.name(children[0]), children[2][0], self.loc(children))
 
-    def signed_number(self, children):
+    def signed_number(self, children: Children) -> tuple[int | float, Location]:
         tok = children[-1]
         text = str(tok)
         if tok.type == "HEX":
@@ -91,37 +93,37 @@ class SyntaxBuilder(BehaviorExpressionRules):
             value = float(text)
         return (-value if len(children) > 1 else value), self.loc(children)
 
-    def enum_decl(self, children):
+    def enum_decl(self, children: Children) -> s.EnumDecl:
         members = tuple(c for c in children if isinstance(c, s.EnumMember))
         return s.EnumDecl(self.name(children[1]), members, self.loc(children))
 
-    def enum_member(self, children):
+    def enum_member(self, children: Children) -> s.EnumMember:
         number = None
         if len(children) == 3:
             value = children[2]
             number = int(str(value), 16) if value.type == "HEX" else int(str(value))
         return s.EnumMember(self.name(children[0]), number, self.loc(children))
 
-    def enum_extend_decl(self, children):
+    def enum_extend_decl(self, children: Children) -> NoReturn:
         raise self.unsupported("extending an enum", children[0])
 
     # ------------------------------------------------------------------ type declarations
 
-    def type_decl(self, children):
+    def type_decl(self, children: Children) -> s.TypeDecl:
         kind, name = children[0], children[1]
         parent = children[2] if isinstance(children[2], s.QualifiedName) else None
         members = tuple(c for c in children[2:] if not isinstance(c, (Token, s.QualifiedName)))
         return s.TypeDecl(str(kind), name, parent, members, self.loc(children))
 
-    def inherits(self, children):
+    def inherits(self, children: Children) -> s.QualifiedName:
         if len(children) > 2:
             raise self.unsupported("conditional inheritance", children[2])
         return children[1]
 
-    def inherits_condition(self, children):
+    def inherits_condition(self, children: Children) -> Location:
         return self.loc(children)
 
-    def modifier_decl(self, children):
+    def modifier_decl(self, children: Children) -> s.TypeDecl:
         name = children[1]
         if len(name.parts) > 1:
             raise self.unsupported("actor modifiers (modifier actor.name)", name.location)
@@ -130,16 +132,17 @@ class SyntaxBuilder(BehaviorExpressionRules):
         members = tuple(c for c in children[2:] if not isinstance(c, Token))
         return s.TypeDecl("modifier", name, None, members, self.loc(children))
 
-    def modifier_of(self, children):
+    def modifier_of(self, children: Children) -> Location:
         return self.loc(children)
 
-    def extend_decl(self, children):
+    def extend_decl(self, children: Children) -> s.Extension:
         members = tuple(c for c in children[2:] if not isinstance(c, Token))
         return s.Extension(children[1], members, self.loc(children))
 
     # ------------------------------------------------------------------ members
 
-    def _param_parts(self, children):
+    def _param_parts(self, children: Children) -> tuple[tuple[str, ...], s.TypeRef, s.Expression | None,
+                                                         tuple[s.WithMember, ...]]:
         names, type_ref, default, with_members = [], None, None, ()
         for c in children:
             if isinstance(c, Token):
@@ -151,27 +154,28 @@ class SyntaxBuilder(BehaviorExpressionRules):
                 with_members = c
             else:
                 default = c
+        assert type_ref is not None, "the grammar requires ': type'"
         return tuple(names), type_ref, default, with_members
 
-    def param_decl(self, children):
+    def param_decl(self, children: Children) -> s.ParameterDecl:
         names, type_ref, default, with_members = self._param_parts(children)
         return s.ParameterDecl(names, type_ref, default, with_members, self.loc(children))
 
-    def global_decl(self, children):
+    def global_decl(self, children: Children) -> s.ParameterDecl:
         names, type_ref, default, with_members = self._param_parts(children)
         return s.ParameterDecl(names, type_ref, default, with_members, self.loc(children), is_global=True)
 
-    def var_decl(self, children):
+    def var_decl(self, children: Children) -> s.VariableDecl:
         names, type_ref, default, _ = self._param_parts(children)
         return s.VariableDecl(names, type_ref, default, self.loc(children))
 
-    def default(self, children):
+    def default(self, children: Children) -> s.Expression:
         return children[1]
 
-    def type_ref(self, children):
+    def type_ref(self, children: Children) -> s.TypeRef:
         return s.TypeRef(children[-1], len(children) == 3, self.loc(children))
 
-    def event_decl(self, children):
+    def event_decl(self, children: Children) -> s.EventDecl:
         params: tuple = ()
         for c in children[2:]:
             if isinstance(c, tuple):
@@ -180,10 +184,10 @@ class SyntaxBuilder(BehaviorExpressionRules):
                 raise self.unsupported("event ... is <condition>", c)
         return s.EventDecl(self.name(children[1]), params, self.loc(children))
 
-    def event_is(self, children):
+    def event_is(self, children: Children) -> Location:
         return self.loc(children)
 
-    def method_decl(self, children):
+    def method_decl(self, children: Children) -> s.MethodDecl:
         params: tuple = ()
         return_type = None
         impl = None
@@ -194,45 +198,46 @@ class SyntaxBuilder(BehaviorExpressionRules):
                 return_type = c
             elif isinstance(c, list):
                 impl = c
+        assert impl is not None, "the grammar requires 'is external ...' (the other forms raise)"
         external, arguments = impl
         return s.MethodDecl(self.name(children[1]), params, return_type, external, arguments,
                             self.loc(children))
 
-    def method_params(self, children):
+    def method_params(self, children: Children) -> tuple[s.MethodParameter, ...]:
         return tuple(c for c in children if isinstance(c, s.MethodParameter))
 
-    def method_param(self, children):
+    def method_param(self, children: Children) -> s.MethodParameter:
         default = children[3] if len(children) > 3 else None
         return s.MethodParameter(self.name(children[0]), children[2], default, self.loc(children))
 
-    def external_impl(self, children):
+    def external_impl(self, children: Children) -> list[Any]:
         if children[0].type == "ONLY":
             raise self.unsupported("'only' methods", children[0])
         name = children[1]
         arguments = next((c for c in children if isinstance(c, tuple)), ())
         return [name, arguments]
 
-    def expression_impl(self, children):
+    def expression_impl(self, children: Children) -> NoReturn:
         raise self.unsupported("methods implemented by 'is expression'", children[0])
 
-    def undefined_impl(self, children):
+    def undefined_impl(self, children: Children) -> NoReturn:
         raise self.unsupported("methods declared 'is undefined'", children[0])
 
-    def with_block(self, children):
+    def with_block(self, children: Children) -> tuple[s.WithMember, ...]:
         return tuple(c for c in children if not isinstance(c, Token))
 
-    def keep_stmt(self, children):
+    def keep_stmt(self, children: Children) -> s.KeepConstraint:
         return children[0]
 
-    def keep(self, children):
+    def keep(self, children: Children) -> s.KeepConstraint:
         qualifier = children[2] if isinstance(children[2], Token) else None
         return s.KeepConstraint(children[-2], qualifier is not None and qualifier.type == "DEFAULT",
                                 self.loc(children))
 
-    def modifier_stmt(self, children):
+    def modifier_stmt(self, children: Children) -> s.CoverageDecl | s.ModifierInvocation:
         return children[0]
 
-    def modifier_call(self, children):
+    def modifier_call(self, children: Children) -> s.CoverageDecl | s.ModifierInvocation:
         name = children[0]
         arguments = children[2] if isinstance(children[2], tuple) else ()
         if len(name.parts) == 1 and name.parts[0] in COVERAGE_MEMBERS:
@@ -240,11 +245,11 @@ class SyntaxBuilder(BehaviorExpressionRules):
         self.check_call_name(name)
         return s.ModifierInvocation(name, arguments, self.loc(children))
 
-    def until_stmt(self, children):
+    def until_stmt(self, children: Children) -> s.Until:
         return s.Until(children[1], self.loc(children))
 
-    def on_directive(self, children):
+    def on_directive(self, children: Children) -> NoReturn:
         raise self.unsupported("on @event", children[0])
 
-    def do_directive(self, children):
+    def do_directive(self, children: Children) -> s.DoDirective:
         return s.DoDirective(children[1], self.loc(children))

@@ -9,7 +9,7 @@ Unary minus written directly before a number literal is folded into it (``-2.0ra
 from __future__ import annotations
 
 import re
-from typing import cast
+from typing import Any, NoReturn, Protocol, cast
 
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.location import Location
@@ -37,8 +37,23 @@ BINARY_PRECEDENCE = {
 PREFIX_PRECEDENCE = {"not": 4, "-": 8, "+": 8}
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
+#: What a rule's callback receives: the rule's tokens and the values its sub-rules returned (syntax nodes,
+#: tuples, lists, locations), in written order. The table-driven parser does not type them.
+Children = list[Any]
 
-def _start(x):
+
+class Located(Protocol):
+    """A syntax node: anything with a location."""
+
+    @property
+    def location(self) -> Location: ...
+
+
+#: What a location can be taken from: a token, a node, a location, or a run of them (first and last count).
+Spanned = Token | Location | Located | tuple[Any, ...] | list[Any]
+
+
+def _start(x: Spanned) -> tuple[int, int, int]:
     """(line, column, offset) where ``x`` (token, node, or tuple of nodes) begins."""
     if isinstance(x, Token):
         return x.line, x.column, x.start_pos
@@ -48,7 +63,7 @@ def _start(x):
     return loc.line, loc.column, loc.start_pos
 
 
-def _end(x):
+def _end(x: Spanned) -> tuple[int, int, int]:
     """(line, column, offset) just after ``x``."""
     if isinstance(x, Token):
         return x.end_line, x.end_column, x.end_pos
@@ -72,7 +87,7 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ helpers
 
-    def loc(self, children) -> Location:
+    def loc(self, children: Children) -> Location:
         items = [c for c in children if c is not None and not (isinstance(c, tuple) and not c)]
         if not items:
             return Location(self.file, 1, 1, 1, 1, 0, 0)
@@ -84,7 +99,7 @@ class BehaviorExpressionRules:
         return Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
                           tok.start_pos, tok.end_pos)
 
-    def span(self, first, last) -> Location:
+    def span(self, first: Spanned, last: Spanned) -> Location:
         line, column, start = _start(first)
         end_line, end_column, end = _end(last)
         return Location(self.file, line, column, end_line, end_column, start, end)
@@ -94,7 +109,7 @@ class BehaviorExpressionRules:
             self._lines = _LINE_BREAK.split(self.text)
         return self._lines[line - 1] if 0 < line <= len(self._lines) else None
 
-    def unsupported(self, what: str, where) -> UnsupportedFeatureError:
+    def unsupported(self, what: str, where: Token | Location) -> UnsupportedFeatureError:
         loc = self.tloc(where) if isinstance(where, Token) else where
         return UnsupportedFeatureError(f"not supported: {what}", loc, self.source_line(loc.line))
 
@@ -111,10 +126,10 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ behaviours
 
-    def labelled(self, children):
+    def labelled(self, children: Children) -> s.Behavior:
         return replace(children[-1], label=self.name(children[0]), location=self.loc(children))
 
-    def composite(self, children):
+    def composite(self, children: Children) -> s.Composite:
         arguments: tuple = ()
         members, with_members = [], ()
         for c in children[1:]:
@@ -128,10 +143,10 @@ class BehaviorExpressionRules:
                 members.append(c)
         return s.Composite(str(children[0]), None, tuple(members), arguments, with_members, self.loc(children))
 
-    def composite_args(self, children):
+    def composite_args(self, children: Children) -> list[s.Argument]:
         return list(children[1]) if isinstance(children[1], tuple) else []
 
-    def invocation(self, children):
+    def invocation(self, children: Children) -> s.Invocation:
         name = children[0]
         self.check_call_name(name)
         arguments = children[2] if isinstance(children[2], tuple) else ()
@@ -139,28 +154,28 @@ class BehaviorExpressionRules:
         with_members = last if isinstance(last, tuple) and last is not arguments else ()
         return s.Invocation(None, name, arguments, with_members, self.loc(children))
 
-    def wait(self, children):
+    def wait(self, children: Children) -> s.Wait:
         return s.Wait(None, children[1], self.loc(children))
 
-    def wait_condition(self, children):
+    def wait_condition(self, children: Children) -> s.Expression:
         for c in children[1:]:
             raise self.unsupported(c[0], c[1])
         return children[0]
 
-    def event_as(self, children):
+    def event_as(self, children: Children) -> tuple[str, Location]:
         return ("event field declarations (as ...)", self.loc(children))
 
-    def event_if(self, children):
+    def event_if(self, children: Children) -> tuple[str, Location]:
         return ("event conditions (if ...)", self.loc(children))
 
-    def emit(self, children):
+    def emit(self, children: Children) -> s.Emit:
         arguments = next((c for c in children if isinstance(c, tuple)), ())
         return s.Emit(None, self.name(children[1]), arguments, self.loc(children))
 
-    def emit_args(self, children):
+    def emit_args(self, children: Children) -> tuple[s.Argument, ...]:
         return children[1] if isinstance(children[1], tuple) else ()
 
-    def call(self, children):
+    def call(self, children: Children) -> s.CallDirective:
         expr = children[1]
         if not isinstance(expr, s.Call):
             loc = expr.location
@@ -170,7 +185,7 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ arguments
 
-    def arguments(self, children):
+    def arguments(self, children: Children) -> tuple[s.Argument, ...]:
         args = tuple(c for c in children if not isinstance(c, Token))
         seen_named = False
         for arg in args:
@@ -182,15 +197,15 @@ class BehaviorExpressionRules:
                                      "write positional arguments first, then the named ones")
         return args
 
-    def named_argument(self, children):
+    def named_argument(self, children: Children) -> s.Argument:
         return s.Argument(self.name(children[0]), children[2], self.loc(children))
 
-    def positional_argument(self, children):
+    def positional_argument(self, children: Children) -> s.Argument:
         return s.Argument(None, children[0], self.loc(children))
 
     # ------------------------------------------------------------------ expressions
 
-    def expr(self, children):
+    def expr(self, children: Children) -> s.Expression:
         if len(children) == 1:
             return children[0]
         if len(children) >= 5 and isinstance(children[-4], Token) and children[-4].value == "?":
@@ -198,13 +213,13 @@ class BehaviorExpressionRules:
             return s.Ternary(condition, children[-3], children[-1], self.span(condition, children[-1]))
         return self._climb(children)
 
-    def _climb(self, items):
+    def _climb(self, items: Children) -> s.Expression:
         if len(items) == 1:
             return items[0]
         node, pos = self._climb_from(items, 0, 0)
         return node
 
-    def _climb_from(self, items, pos, min_prec):
+    def _climb_from(self, items: Children, pos: int, min_prec: int) -> tuple[s.Expression, int]:
         first = items[pos]
         if isinstance(first, Token):  # prefix operator
             operand, pos = self._climb_from(items, pos + 1, PREFIX_PRECEDENCE[str(first)])
@@ -220,7 +235,7 @@ class BehaviorExpressionRules:
             left = s.BinaryOp(str(op), left, right, self.span(left, right))
         return left, pos
 
-    def _unary(self, op: Token, operand):
+    def _unary(self, op: Token, operand: s.Expression) -> s.Expression:
         loc = self.span(op, operand)
         adjacent = operand.location.start_pos == op.end_pos
         if op.value == "+":
@@ -234,16 +249,16 @@ class BehaviorExpressionRules:
                 return s.PhysicalLiteral(-operand.number, operand.unit, loc)
         return s.UnaryOp(str(op), operand, loc)
 
-    def paren(self, children):
+    def paren(self, children: Children) -> s.Expression:
         return children[1]
 
-    def member(self, children):
+    def member(self, children: Children) -> s.EventRef | s.MemberAccess:
         target, name = children[0], children[2]
         if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
             return s.EventRef(target.path + (self.name(name),), self.loc(children))
         return s.MemberAccess(target, self.name(name), self.loc(children))
 
-    def call_expr(self, children):
+    def call_expr(self, children: Children) -> s.Call:
         callee = children[0]
         if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
             what = "type casts" if callee.member == "as" else "type tests"
@@ -253,52 +268,52 @@ class BehaviorExpressionRules:
         arguments = children[2] if isinstance(children[2], tuple) else ()
         return s.Call(callee, arguments, self.loc(children))
 
-    def element_access(self, children):
+    def element_access(self, children: Children) -> NoReturn:
         raise self.unsupported("element access (list[index])", self.loc(children))
 
-    def int_lit(self, children):
+    def int_lit(self, children: Children) -> s.Literal:
         return s.Literal("int", int(str(children[0])), self.tloc(children[0]))
 
-    def hex_lit(self, children):
+    def hex_lit(self, children: Children) -> s.Literal:
         return s.Literal("int", int(str(children[0]), 16), self.tloc(children[0]))
 
-    def float_lit(self, children):
+    def float_lit(self, children: Children) -> s.Literal:
         return s.Literal("float", float(str(children[0])), self.tloc(children[0]))
 
-    def string_lit(self, children):
+    def string_lit(self, children: Children) -> s.Literal:
         return s.Literal("string", unescape_string(str(children[0])), self.tloc(children[0]))
 
-    def bool_lit(self, children):
+    def bool_lit(self, children: Children) -> s.Literal:
         return s.Literal("bool", children[0].type == "TRUE", self.tloc(children[0]))
 
-    def physical(self, children):
+    def physical(self, children: Children) -> s.PhysicalLiteral:
         number, unit = children
         value: int | float = float(str(number)) if number.type == "FLOAT" else int(str(number))
         return s.PhysicalLiteral(value, self.name(unit), self.loc(children))
 
-    def identifier(self, children):
+    def identifier(self, children: Children) -> s.Identifier:
         return s.Identifier(self.name(children[0]), self.tloc(children[0]))
 
-    def list_expr(self, children):
+    def list_expr(self, children: Children) -> s.ListExpr:
         items = tuple(c for c in children if not isinstance(c, Token))
         return s.ListExpr(items, self.loc(children))
 
-    def range_expr(self, children):
+    def range_expr(self, children: Children) -> s.RangeExpr:
         return s.RangeExpr(children[1], children[3], self.loc(children))
 
-    def range_expr_unit(self, children):
+    def range_expr_unit(self, children: Children) -> s.RangeExpr:
         """Foretify's ``[10..50]kph``: the unit after the bracket applies to both (plain number) ends."""
         unit = self.name(children[5])
         ends = [_with_unit(end, unit) for end in (children[1], children[3])]
         return s.RangeExpr(ends[0], ends[1], self.loc(children))
 
-    def enum_ref(self, children):
+    def enum_ref(self, children: Children) -> s.EnumValueRef:
         return s.EnumValueRef(self.name(children[0]), self.name(children[2]), self.loc(children))
 
-    def enum_ref_bare(self, children):
+    def enum_ref_bare(self, children: Children) -> s.EnumValueRef:
         return s.EnumValueRef(None, self.name(children[1]), self.loc(children))
 
-    def event_ref(self, children):
+    def event_ref(self, children: Children) -> s.EventRef:
         return s.EventRef((self.name(children[1]),), self.loc(children))
 
 

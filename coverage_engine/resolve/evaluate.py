@@ -11,10 +11,11 @@ from __future__ import annotations
 import importlib
 import operator
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any, cast
 
+from coverage_engine.location import Location
 from coverage_engine.resolve.model import (
     Const,
     Expr,
@@ -31,7 +32,7 @@ from coverage_engine.resolve.model import (
 class EvaluationError(Exception):
     """An expression could not be computed at run time (e.g. an external method raised)."""
 
-    def __init__(self, message: str, location=None) -> None:
+    def __init__(self, message: str, location: Location | None = None) -> None:
         super().__init__(message)
         self.location = location
 
@@ -68,7 +69,7 @@ def apply_operator(op: str, values: list) -> Any:
 _function_cache: dict[tuple[str, str], Callable] = {}
 
 
-def add_import_paths(paths) -> None:
+def add_import_paths(paths: Iterable[str | Path]) -> None:
     """Make user modules importable from these folders (working directory, scenario directory)."""
     for path in paths:
         text = str(Path(path).resolve())

@@ -139,7 +139,7 @@ def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | No
         raise ConstraintViolation(f"constraint does not hold: keep({keep_text(check)})", check.location)
 
 
-def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve) -> None:
+def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve: ResolveExpression) -> None:
     """A keep condition orders numbers and physical quantities only: ``keep(it.z <= "x")`` is refused.
 
     Ordering strings is legal in an expression, but in a constraint it is almost always a mistyped
@@ -149,7 +149,7 @@ def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve) -> None
         _refuse_string_order(expr.operand, scope, resolve)
     elif isinstance(expr, syntax.BinaryOp):
         if expr.op in ("<", "<=", ">", ">="):
-            if resolve(expr.left, scope).type is STRING:
+            if resolve(expr.left, scope, None).type is STRING:
                 raise ResolveError(f"a keep condition cannot order strings with '{expr.op}' (it compares numbers "
                                    "and physical quantities); to fix a value write 'keep(it.member == value)'",
                                    expr.location)

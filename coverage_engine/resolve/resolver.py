@@ -22,7 +22,7 @@ from coverage_engine.resolve.imports import collect_units
 from coverage_engine.resolve.namespace import Namespace, build_namespace
 from coverage_engine.resolve.overrides import check_document, not_overridable_reason, override_hook
 from coverage_engine.resolve.scope import ResolveContext, Scope, TypedExpr
-from coverage_engine.resolve.types import CompoundType
+from coverage_engine.resolve.types import CompoundType, FieldDecl
 from coverage_engine.resolve.values import FieldInfo, global_value, instantiate
 
 
@@ -132,5 +132,5 @@ def _scenario(ctx: ResolveContext, stype: CompoundType, values: Mapping | None) 
                           tuple(events.values()), body, location, coverage)
 
 
-def _info(fdecl) -> FieldInfo:
+def _info(fdecl: FieldDecl) -> FieldInfo:
     return FieldInfo(fdecl.name, fdecl.type, fdecl.default, True, fdecl.location)

@@ -9,14 +9,13 @@ concrete scenarios first; when a scenario runs it is an error.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from coverage_engine.errors import ResolveError, UnsupportedFeatureError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
-from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
-from coverage_engine.resolve.types import BOOL, STRING, CompoundType, OscType
+from coverage_engine.resolve.scope import KeepValue, ResolveExpression, Scope, TypedExpr
+from coverage_engine.resolve.types import BOOL, STRING, CompoundType
 
 #: Operators whose keep is a condition (``==`` on a member path is a value, ``in`` a variation).
 _CONDITIONS = frozenset({"!=", "<", "<=", ">", ">=", "and", "or", "=>"})
@@ -106,10 +105,6 @@ def split_with_keeps(with_members: tuple, scope: Scope) -> tuple[list[KeepValue]
             else:
                 values.append(found)
     return values, checks
-
-
-#: ``resolve_expression`` of :mod:`coverage_engine.resolve.values` (passed in: values imports this module).
-ResolveExpression = Callable[[syntax.Expression, Scope, "OscType | None"], TypedExpr]
 
 
 def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | None,

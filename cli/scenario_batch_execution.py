@@ -31,6 +31,7 @@ from store.database import StoreError, StoreMissing
 if TYPE_CHECKING:
     from executor.batch.flaky import VariantRecord
     from executor.batch.inputs import Shard
+    from executor.batch.orchestration import BatchRequest, LocalRun
     from executor.output.folder_lock import FolderLock
     from store.jobs import Batch
     from store.queue import QueueStore
@@ -205,7 +206,41 @@ def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, s
     from store.jobs import BatchOptions
 
     input_dir = input_dirs[0] if input_dirs else None
+    _check_run_options(input_dir=input_dir, command=command, simulation=simulation, resume=resume,
+                       rerun_failed=rerun_failed, only_new=only_new, enqueue_only=enqueue_only, post_run=post_run)
+    request = orchestration.BatchRequest(
+        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
+        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
+                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
+                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
+                             pass_rate=pass_rate),
+        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
+    store = _open_store(store_url)
+    lock = None
+    try:
+        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
+            lock = _lock_output(request.output_dir, wait)
+        batch = _batch_to_run(store, request, output_dir, resume=resume, rerun_failed=rerun_failed,
+                              only_new=only_new, enqueue_only=enqueue_only)
+        if isinstance(batch, int):
+            return batch
+        if enqueue_only:
+            count = sum(store.counts(batch.id).values())
+            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
+                       f"'{PROG} worker --store URL' on each host")
+            return 0
+        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        return _report_run(store, batch, ran, shard)
+    finally:
+        store.close()
+        if lock is not None:
+            lock.release()
 
+
+def _check_run_options(*, input_dir: str | None, command: Sequence[str], simulation: str | None, resume: bool,
+                       rerun_failed: bool, only_new: bool, enqueue_only: bool, post_run: Sequence[str]) -> None:
+    """The options of a batch run that do not go together, or are missing, are usage errors before anything
+    is touched."""
     if simulation and command:
         raise click.UsageError("--simulation is for the built-in runner; with a launch command, pass it in the "
                                "command (-- scenario_execution {SCENARIO} -o {OUTPUT_DIR} --simulation ...)")
@@ -220,76 +255,69 @@ def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, s
     if command:                  # none: the built-in runner (scenario_execution forked, not launched)
         _check_command(command)
     _check_post_run(post_run)
-    request = orchestration.BatchRequest(
-        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
-        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
-                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
-                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
-                             pass_rate=pass_rate),
-        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
-    store = _open_store(store_url)
-    lock = None
-    try:
-        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
-            lock = _lock_output(request.output_dir, wait)
-        if rerun_failed:
-            earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
-            if rerun is None:
-                click.echo(f"every job of batch {earlier.id} passed: nothing to rerun")
-                return 0
-            click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
-                       f"pass in batch {earlier.id}")
-            batch = rerun
-        elif only_new:
-            made = orchestration.create_only_new_batch(store, request, mode="shared" if enqueue_only else "local")
-            if made.batch is None:
-                click.echo(f"nothing new: each of the {made.passed_over} scenario file(s) of -i has a verdict in "
-                           f"{output_dir} already; nothing ran")
-                return orchestration.EXIT_NOTHING_RAN
-            batch = made.batch
-            if made.earlier is not None:
-                click.echo(f"batch {batch.id}: {sum(store.counts(batch.id).values())} new scenario file(s); "
-                           f"{made.passed_over} already have a verdict in batch {made.earlier.id} (the report "
-                           "keeps theirs)")
-        elif resume:
-            batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
-        else:
-            batch = orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
-        if enqueue_only:
-            count = sum(store.counts(batch.id).values())
-            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
-                       f"'{PROG} worker --store URL' on each host")
-            return 0
-        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        counts, signum = ran.counts, ran.signum
-        report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
-        _print_failures(store, batch)
-        if ran.outcome is not None:
-            from executor.batch.batch_outcome import flaky_lines
 
-            for text in flaky_lines(ran.outcome):
-                click.echo(text)
-        if ran.report_error is not None:
-            report = None
-        line = orchestration.summary_line(batch, counts, report, ran.outcome)
-        if signum is not None:
-            line += "; interrupted, finish with --resume"
-        click.echo(line)
-        if ran.disk_full is not None:
-            click.echo(f"error: no space left on the device holding {ran.disk_full}: the batch stopped; "
-                       + (f"{ran.report_error}, " if ran.report_error else "")
-                       + f"every finished result is in the store ({store.url}); make room, then run the same "
-                       "command with --resume to finish it", err=True)
-            return orchestration.EXIT_FAILED if signum is None else orchestration.exit_code(counts, signum)
-        if not sum(counts.values()) and signum is None:
-            where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
-            click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "
-                       "pytest exits when it collects no test)", err=True)
-        return orchestration.exit_code(counts, signum)
-    finally:
-        store.close()
-        if lock is not None:
-            lock.release()
+
+def _batch_to_run(store: QueueStore, request: BatchRequest, output_dir: str, *, resume: bool, rerun_failed: bool,
+                  only_new: bool, enqueue_only: bool) -> Batch | int:
+    """The batch this run works on: the reruns of the folder's failures, its new files, the unfinished batch
+    it resumes, or a new batch of the input; or the exit code when there is nothing to run (``output_dir``:
+    the output folder as the command line gave it)."""
+    from executor.batch import orchestration
+
+    if rerun_failed:
+        earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
+        if rerun is None:
+            click.echo(f"every job of batch {earlier.id} passed: nothing to rerun")
+            return 0
+        click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
+                   f"pass in batch {earlier.id}")
+        return rerun
+    if only_new:
+        made = orchestration.create_only_new_batch(store, request, mode="shared" if enqueue_only else "local")
+        if made.batch is None:
+            click.echo(f"nothing new: each of the {made.passed_over} scenario file(s) of -i has a verdict in "
+                       f"{output_dir} already; nothing ran")
+            return orchestration.EXIT_NOTHING_RAN
+        if made.earlier is not None:
+            click.echo(f"batch {made.batch.id}: {sum(store.counts(made.batch.id).values())} new scenario file(s); "
+                       f"{made.passed_over} already have a verdict in batch {made.earlier.id} (the report "
+                       "keeps theirs)")
+        return made.batch
+    if resume:
+        return orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
+    return orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
+
+
+def _report_run(store: QueueStore, batch: Batch, ran: LocalRun, shard: Shard | None) -> int:
+    """Print what the run of ``batch`` left (failures, flaky variants, the summary line, a full disk, an empty
+    shard) and return its exit code."""
+    from executor.batch import orchestration
+
+    counts, signum = ran.counts, ran.signum
+    report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
+    _print_failures(store, batch)
+    if ran.outcome is not None:
+        from executor.batch.batch_outcome import flaky_lines
+
+        for text in flaky_lines(ran.outcome):
+            click.echo(text)
+    if ran.report_error is not None:
+        report = None
+    line = orchestration.summary_line(batch, counts, report, ran.outcome)
+    if signum is not None:
+        line += "; interrupted, finish with --resume"
+    click.echo(line)
+    if ran.disk_full is not None:
+        click.echo(f"error: no space left on the device holding {ran.disk_full}: the batch stopped; "
+                   + (f"{ran.report_error}, " if ran.report_error else "")
+                   + f"every finished result is in the store ({store.url}); make room, then run the same "
+                   "command with --resume to finish it", err=True)
+        return orchestration.EXIT_FAILED if signum is None else orchestration.exit_code(counts, signum)
+    if not sum(counts.values()) and signum is None:
+        where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
+        click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "
+                   "pytest exits when it collects no test)", err=True)
+    return orchestration.exit_code(counts, signum)
 
 
 @click.command(context_settings=CONTEXT)

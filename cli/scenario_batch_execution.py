@@ -17,16 +17,16 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 import click
 
+from cli.batch_options import JobsType, RepeatType, ShardType
 from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from coverage_engine.results.files import RESULT_FILE
 from executor.batch.errors import BatchError, BatchUsageError
 from executor.output.terminal import printable
-from store.database import StoreError, StoreMissing
 
 if TYPE_CHECKING:
     from executor.batch.flaky import VariantRecord
@@ -38,67 +38,6 @@ if TYPE_CHECKING:
 
 PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
-
-
-def _count(kind: click.ParamType, text: str, given: object, other: str, param: click.Parameter | None,
-           ctx: click.Context | None) -> int:
-    """``text`` as a whole number of at least 1; else the option's usage error (``other``: the other form
-    the option takes)."""
-    try:
-        number = int(text)
-    except ValueError:
-        kind.fail(f"{given!r} is neither a number nor {other}", param, ctx)
-    if number < 1:
-        kind.fail(f"{number} must be at least 1", param, ctx)
-    return number
-
-
-class JobsType(click.ParamType):
-    """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs this process may use."""
-
-    name = "N|auto"
-
-    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> int:
-        if isinstance(value, int):
-            return value
-        if str(value).lower() == "auto":
-            from executor.batch.builtin_runner import usable_cpus
-
-            return usable_cpus()
-        return _count(self, str(value), value, "'auto'", param, ctx)
-
-
-class ShardType(click.ParamType):
-    """``--shard i/N``: the i-th of N subsets, 1 <= i <= N."""
-
-    name = "i/N"
-
-    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> Shard:
-        from executor.batch.errors import BadShard
-        from executor.batch.inputs import Shard
-
-        if isinstance(value, Shard):
-            return value
-        try:
-            return Shard.parse(str(value))
-        except BadShard as exc:
-            self.fail(str(exc).removeprefix("--shard "), param, ctx)
-
-
-class RepeatType(click.ParamType):
-    """``--repeat``: ``N`` attempts of each variant, or ``until-fail:N`` (stop a variant at its first failure);
-    converts to ``(N, until_fail)``."""
-
-    name = "N|until-fail:N"
-
-    def convert(self, value: object, param: click.Parameter | None,
-                ctx: click.Context | None) -> tuple[int, bool]:
-        if isinstance(value, tuple):
-            return value
-        text = str(value).strip()
-        until_fail = text.lower().startswith("until-fail:")
-        number = text.split(":", 1)[1] if until_fail else text
-        return _count(self, number, value, "'until-fail:N'", param, ctx), until_fail
 
 
 def _check_command(command: Sequence[str]) -> None:
@@ -482,30 +421,27 @@ def _print_failures(store: QueueStore, batch: Batch) -> None:
         click.echo(text)
 
 
-def _unknown_subcommand(word: str) -> None:
+def _unknown_subcommand(word: str) -> NoReturn:
     """A bare word first is a subcommand or a mistake (the batch run itself takes only options): say which
     subcommands there are, and the nearest one, as click does for a misspelt option."""
     import difflib
 
     close = difflib.get_close_matches(word, list(SUBCOMMANDS), n=1, cutoff=0.6)
     hint = f" Did you mean '{close[0]}'?" if close else ""
-    click.echo(f"Usage: {PROG} [OPTIONS] -- [COMMAND]...\n       {PROG} worker|status|report [OPTIONS]\n"
-               f"Try '{PROG} -h' for help.\n\n{PROG}: error: no such subcommand '{word}' (subcommands: "
-               f"{', '.join(SUBCOMMANDS)}).{hint}", err=True)
-    raise SystemExit(2)
+    raise BatchUsageError(f"no such subcommand '{word}' (subcommands: {', '.join(SUBCOMMANDS)}).{hint}")
 
 
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point: dispatch to a subcommand or the batch run, map errors to exit codes."""
     args = list(sys.argv[1:] if argv is None else argv)
     command, prog = run_command, PROG
-    if args and not args[0].startswith("-") and args[0] not in SUBCOMMANDS:
-        _unknown_subcommand(args[0])
     if args and args[0] in SUBCOMMANDS:
         command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
         args = args[1:]
-    boundary = Boundary(prog, runtime_errors=(BatchError, StoreError), usage_errors=(BatchUsageError, StoreMissing),
-                        one_line_name=PROG)
+    boundary = Boundary(prog, one_line_name=PROG)
+    if args and not args[0].startswith("-") and command is run_command:
+        word = args[0]
+        sys.exit(boundary.guarded(lambda: _unknown_subcommand(word)))
     boundary.main(command, args)
 
 

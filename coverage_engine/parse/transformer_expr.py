@@ -9,12 +9,23 @@ Unary minus written directly before a number literal is folded into it (``-2.0ra
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from typing import Any, NoReturn, Protocol, cast
 
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
+from coverage_engine.parse.parts import (
+    ArgumentList,
+    Refusal,
+    WithBlock,
+    arguments_of,
+    built,
+    maybe_node,
+    nodes,
+    token,
+)
 from coverage_engine.parse.strings import unescape_string
 from coverage_engine.records import replace
 
@@ -37,13 +48,14 @@ BINARY_PRECEDENCE = {
 PREFIX_PRECEDENCE = {"not": 4, "-": 8, "+": 8}
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
-#: What a rule's callback receives: the rule's tokens and the values its sub-rules returned (syntax nodes,
-#: tuples, lists, locations), in written order. The table-driven parser does not type them.
+#: What a rule's callback receives: the rule's tokens and the values its sub-rules built (syntax nodes and
+#: the records of :mod:`~coverage_engine.parse.parts`), in written order. The table-driven parser does not
+#: type them; :mod:`~coverage_engine.parse.parts` finds each by name or class.
 Children = list[Any]
 
 
 class Located(Protocol):
-    """A syntax node: anything with a location."""
+    """A syntax node or a part record: anything with a location."""
 
     @property
     def location(self) -> Location: ...
@@ -87,7 +99,7 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ helpers
 
-    def loc(self, children: Children) -> Location:
+    def loc(self, children: Sequence[Any]) -> Location:
         items = [c for c in children if c is not None and not (isinstance(c, tuple) and not c)]
         if not items:
             return Location(self.file, 1, 1, 1, 1, 0, 0)
@@ -127,56 +139,53 @@ class BehaviorExpressionRules:
     # ------------------------------------------------------------------ behaviours
 
     def labelled(self, children: Children) -> s.Behavior:
-        return replace(children[-1], label=self.name(children[0]), location=self.loc(children))
+        (behavior,) = built(children)
+        return replace(behavior, label=self.name(token(children, "NAME")), location=self.loc(children))
 
     def composite(self, children: Children) -> s.Composite:
-        arguments: tuple = ()
-        members, with_members = [], ()
-        for c in children[1:]:
-            if isinstance(c, Token):
-                continue
-            if isinstance(c, list):
-                arguments = tuple(c)
-            elif isinstance(c, tuple):
-                with_members = c
-            else:
-                members.append(c)
-        return s.Composite(str(children[0]), None, tuple(members), arguments, with_members, self.loc(children))
+        kind = token(children, "SERIAL", "PARALLEL", "ONE_OF")
+        with_block = maybe_node(children, WithBlock)
+        members = tuple(c for c in built(children) if not isinstance(c, (ArgumentList, WithBlock)))
+        return s.Composite(str(kind), None, members, arguments_of(children),
+                           with_block.members if with_block else (), self.loc(children))
 
-    def composite_args(self, children: Children) -> list[s.Argument]:
-        return list(children[1]) if isinstance(children[1], tuple) else []
+    def composite_args(self, children: Children) -> ArgumentList:
+        return ArgumentList(arguments_of(children))
 
     def invocation(self, children: Children) -> s.Invocation:
-        name = children[0]
+        name, _open, *inside, _close, end = children
         self.check_call_name(name)
-        arguments = children[2] if isinstance(children[2], tuple) else ()
-        last = children[-1]
-        with_members = last if isinstance(last, tuple) and last is not arguments else ()
-        return s.Invocation(None, name, arguments, with_members, self.loc(children))
+        with_members = end.members if type(end) is WithBlock else ()
+        return s.Invocation(None, name, arguments_of(inside), with_members, self.loc(children))
 
     def wait(self, children: Children) -> s.Wait:
-        return s.Wait(None, children[1], self.loc(children))
+        (condition,) = built(children)
+        return s.Wait(None, condition, self.loc(children))
 
     def wait_condition(self, children: Children) -> s.Expression:
-        for c in children[1:]:
-            raise self.unsupported(c[0], c[1])
-        return children[0]
+        if len(children) == 1:
+            (condition,) = children
+            return condition
+        refused = maybe_node(children, Refusal)
+        if refused is not None:
+            raise self.unsupported(refused.what, refused.location)
+        (condition,) = children
+        return condition
 
-    def event_as(self, children: Children) -> tuple[str, Location]:
-        return ("event field declarations (as ...)", self.loc(children))
+    def event_as(self, children: Children) -> Refusal:
+        return Refusal("event field declarations (as ...)", self.loc(children))
 
-    def event_if(self, children: Children) -> tuple[str, Location]:
-        return ("event conditions (if ...)", self.loc(children))
+    def event_if(self, children: Children) -> Refusal:
+        return Refusal("event conditions (if ...)", self.loc(children))
 
     def emit(self, children: Children) -> s.Emit:
-        arguments = next((c for c in children if isinstance(c, tuple)), ())
-        return s.Emit(None, self.name(children[1]), arguments, self.loc(children))
+        return s.Emit(None, self.name(token(children, "NAME")), arguments_of(children), self.loc(children))
 
-    def emit_args(self, children: Children) -> tuple[s.Argument, ...]:
-        return children[1] if isinstance(children[1], tuple) else ()
+    def emit_args(self, children: Children) -> ArgumentList:
+        return ArgumentList(arguments_of(children))
 
     def call(self, children: Children) -> s.CallDirective:
-        expr = children[1]
+        (expr,) = built(children)
         if not isinstance(expr, s.Call):
             loc = expr.location
             raise OscSyntaxError("'call' needs a method call, e.g. call lib.method()", loc,
@@ -185,8 +194,8 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ arguments
 
-    def arguments(self, children: Children) -> tuple[s.Argument, ...]:
-        args = tuple(c for c in children if not isinstance(c, Token))
+    def arguments(self, children: Children) -> ArgumentList:
+        args = nodes(children, s.Argument)
         seen_named = False
         for arg in args:
             if arg.name is not None:
@@ -195,29 +204,35 @@ class BehaviorExpressionRules:
                 raise OscSyntaxError("positional argument after a named argument", arg.location,
                                      self.source_line(arg.location.line),
                                      "write positional arguments first, then the named ones")
-        return args
+        return ArgumentList(args)
 
     def named_argument(self, children: Children) -> s.Argument:
-        return s.Argument(self.name(children[0]), children[2], self.loc(children))
+        name, _colon, value = children
+        return s.Argument(self.name(name), value, self.loc(children))
 
     def positional_argument(self, children: Children) -> s.Argument:
-        return s.Argument(None, children[0], self.loc(children))
+        (value,) = children
+        return s.Argument(None, value, self.loc(children))
 
     # ------------------------------------------------------------------ expressions
 
     def expr(self, children: Children) -> s.Expression:
+        """A run ``operand (operator operand)*``, with prefix operators, then an optional ``? then : else``."""
         if len(children) == 1:
-            return children[0]
-        if len(children) >= 5 and isinstance(children[-4], Token) and children[-4].value == "?":
-            condition = self._climb(children[:-4])
-            return s.Ternary(condition, children[-3], children[-1], self.span(condition, children[-1]))
+            (only,) = children
+            return only
+        if len(children) >= 5:
+            *run, question, then, _colon, otherwise = children
+            if isinstance(question, Token) and question.value == "?":
+                condition = self._climb(run)
+                return s.Ternary(condition, then, otherwise, self.span(condition, otherwise))
         return self._climb(children)
 
     def _climb(self, items: Children) -> s.Expression:
         if len(items) == 1:
             return items[0]
-        node, pos = self._climb_from(items, 0, 0)
-        return node
+        tree, _ = self._climb_from(items, 0, 0)
+        return tree
 
     def _climb_from(self, items: Children, pos: int, min_prec: int) -> tuple[s.Expression, int]:
         first = items[pos]
@@ -250,41 +265,46 @@ class BehaviorExpressionRules:
         return s.UnaryOp(str(op), operand, loc)
 
     def paren(self, children: Children) -> s.Expression:
-        return children[1]
+        _open, inner, _close = children
+        return inner
 
     def member(self, children: Children) -> s.EventRef | s.MemberAccess:
-        target, name = children[0], children[2]
+        target, _dot, name = children
         if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
             return s.EventRef(target.path + (self.name(name),), self.loc(children))
         return s.MemberAccess(target, self.name(name), self.loc(children))
 
     def call_expr(self, children: Children) -> s.Call:
-        callee = children[0]
+        callee, _open, *inside, _close = children
         if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
             what = "type casts" if callee.member == "as" else "type tests"
             raise self.unsupported(f"{what} (.{callee.member}())", callee.location)
         if isinstance(callee, s.Identifier) and callee.name in UNSUPPORTED_EXPR_CALLS:
             raise self.unsupported(UNSUPPORTED_EXPR_CALLS[callee.name], callee.location)
-        arguments = children[2] if isinstance(children[2], tuple) else ()
-        return s.Call(callee, arguments, self.loc(children))
+        return s.Call(callee, arguments_of(inside), self.loc(children))
 
     def element_access(self, children: Children) -> NoReturn:
         raise self.unsupported("element access (list[index])", self.loc(children))
 
     def int_lit(self, children: Children) -> s.Literal:
-        return s.Literal("int", int(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("int", int(str(tok)), self.tloc(tok))
 
     def hex_lit(self, children: Children) -> s.Literal:
-        return s.Literal("int", int(str(children[0]), 16), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("int", int(str(tok), 16), self.tloc(tok))
 
     def float_lit(self, children: Children) -> s.Literal:
-        return s.Literal("float", float(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("float", float(str(tok)), self.tloc(tok))
 
     def string_lit(self, children: Children) -> s.Literal:
-        return s.Literal("string", unescape_string(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("string", unescape_string(str(tok)), self.tloc(tok))
 
     def bool_lit(self, children: Children) -> s.Literal:
-        return s.Literal("bool", children[0].type == "TRUE", self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("bool", tok.type == "TRUE", self.tloc(tok))
 
     def physical(self, children: Children) -> s.PhysicalLiteral:
         number, unit = children
@@ -292,29 +312,33 @@ class BehaviorExpressionRules:
         return s.PhysicalLiteral(value, self.name(unit), self.loc(children))
 
     def identifier(self, children: Children) -> s.Identifier:
-        return s.Identifier(self.name(children[0]), self.tloc(children[0]))
+        (tok,) = children
+        return s.Identifier(self.name(tok), self.tloc(tok))
 
     def list_expr(self, children: Children) -> s.ListExpr:
-        items = tuple(c for c in children if not isinstance(c, Token))
-        return s.ListExpr(items, self.loc(children))
+        return s.ListExpr(built(children), self.loc(children))
 
     def range_expr(self, children: Children) -> s.RangeExpr:
-        return s.RangeExpr(children[1], children[3], self.loc(children))
+        _open, low, _dots, high, _close = children
+        return s.RangeExpr(low, high, self.loc(children))
 
     def range_expr_unit(self, children: Children) -> s.RangeExpr:
         """Foretify's ``[10..50]kph``: the unit after the bracket applies to both (plain number) ends."""
-        unit = self.name(children[5])
-        ends = [_with_unit(end, unit) for end in (children[1], children[3])]
-        return s.RangeExpr(ends[0], ends[1], self.loc(children))
+        _open, low, _dots, high, _close, unit = children
+        name = self.name(unit)
+        return s.RangeExpr(_with_unit(low, name), _with_unit(high, name), self.loc(children))
 
     def enum_ref(self, children: Children) -> s.EnumValueRef:
-        return s.EnumValueRef(self.name(children[0]), self.name(children[2]), self.loc(children))
+        type_name, _bang, member = children
+        return s.EnumValueRef(self.name(type_name), self.name(member), self.loc(children))
 
     def enum_ref_bare(self, children: Children) -> s.EnumValueRef:
-        return s.EnumValueRef(None, self.name(children[1]), self.loc(children))
+        _bang, member = children
+        return s.EnumValueRef(None, self.name(member), self.loc(children))
 
     def event_ref(self, children: Children) -> s.EventRef:
-        return s.EventRef((self.name(children[1]),), self.loc(children))
+        _at, name = children
+        return s.EventRef((self.name(name),), self.loc(children))
 
 
 def _with_unit(end: s.Expression, unit: str) -> s.Expression:

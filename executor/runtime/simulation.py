@@ -30,8 +30,10 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from coverage_engine.errors import UserError
 
-class SimulationError(Exception):
+
+class SimulationError(UserError):
     """A simulation could not be loaded, or does not fit the scenario (e.g. missing reset arguments)."""
 
 

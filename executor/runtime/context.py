@@ -64,6 +64,13 @@ class ScenarioContext:
         self.processes: dict[str, list] = {}
         #: The run's cover()/record() sampler (executor.runtime.coverage_sampling), when it has items.
         self.coverage: CoverageSampler | None = None
+        #: How close the closest ``compare`` came to flipping (see executor.actions.compare), None before any.
+        self.check_margin: float | None = None
+
+    def note_check_margin(self, margin: float) -> None:
+        """Keep the smallest margin a check has had so far."""
+        if self.check_margin is None or margin < self.check_margin:
+            self.check_margin = margin
 
     def init_variables(self, scenario: Scenario) -> None:
         """Give every ``var`` its initial value (in declaration order, so one may use another)."""

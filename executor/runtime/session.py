@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from types import FrameType
 from typing import NoReturn
 
-from coverage_engine.results.scenario_result import ScenarioResult
+from coverage_engine.results.scenario_result import CHECK_MARGIN_PROPERTY, ScenarioResult
 from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
@@ -149,6 +149,8 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                                         recorders=_recorders(options, context, run.name, period, logger))
                 try:
                     results.append(runner.run())
+                    if context.check_margin is not None:
+                        results[-1].properties[CHECK_MARGIN_PROPERTY] = repr(context.check_margin)
                     if context.coverage is not None:
                         _write_coverage(context, results[-1], logger)
                 except RunAborted as aborted:

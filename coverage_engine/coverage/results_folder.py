@@ -134,8 +134,11 @@ class _Reader:
             return None
 
     def run(self, name: str, folder: Path | None, verdict: str, reason: str | None,
-            assignment: dict[str, object], coverage: RunCoverage | None) -> RunInput:
+            assignment: dict[str, object], coverage: RunCoverage | None,
+            scenario_file: str | None = None) -> RunInput:
         log = self.file(folder, LOG_FILE) if folder is not None else None
+        if coverage is not None and coverage.run.source:
+            scenario_file = coverage.run.source
         if coverage is not None and coverage.run.assignment:
             assignment = dict(coverage.run.assignment)
             if coverage.run.source:
@@ -145,7 +148,8 @@ class _Reader:
             folder=surrogates_escaped(str(folder)) if folder is not None else None,
             log=surrogates_escaped(str(log)) if log is not None else None, assignment=assignment,
             items=coverage.items if coverage else (), samples=coverage.samples if coverage else (),
-            ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else ())
+            ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else (),
+            scenario_file=scenario_file or None)
 
 
 class JobFolder(NamedTuple):
@@ -234,10 +238,11 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
                     found = folders.get(clean_text(job))
                     where = found.path if found is not None else None
                     coverage = reader.coverage(where) if where is not None else None
-                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage)
+                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage,
+                                     scenario_file)
                 continue
             coverage = reader.coverage(folder) if folder is not None else None
-            yield reader.run(name, folder, verdict, reason, assignment, coverage)
+            yield reader.run(name, folder, verdict, reason, assignment, coverage, scenario_file)
     except JunitUnreadable as exc:
         raise ResultsError(f"the merged report cannot be read: {exc}", Location.whole_file(str(report))) from None
     extra = [name for name in folders if name not in listed]

@@ -46,6 +46,8 @@ class RunInput:
     values: Sequence | None = None
     #: Per item, values of ``end`` items at a failure (see ``RunCoverage.unsampled``); usually empty.
     unsampled: Sequence[list] = ()
+    #: The file the run ran (a variant's ``.sce``), when known: where its round and source are read.
+    scenario_file: str | None = None
 
 
 @dataclass

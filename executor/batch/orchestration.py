@@ -15,6 +15,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
+from types import FrameType
 
 from coverage_engine.domains import InputDomain, declared_text, header_domains
 from coverage_engine.proposals import SEARCH_FILE
@@ -209,7 +210,7 @@ def interrupts_stop(worker: Worker) -> Iterator[list[int]]:
     """While inside, SIGINT/SIGTERM stop the worker (a second SIGINT kills the children at once)."""
     received: list[int] = []
 
-    def handler(signum, _frame):
+    def handler(signum: int, _frame: FrameType | None) -> None:
         worker.stop(force=bool(received) and signum == signal.SIGINT)
         received.append(signum)
 

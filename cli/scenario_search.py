@@ -19,11 +19,10 @@ import click
 from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from cli.scenario_batch_execution import JobsType
+from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
 
 PROG = "scenario_search"
 
-#: --goal values: the adaptive strategies of scenario_variation --from (spelled here so -h imports nothing more).
-GOALS = ("boundary", "fill-holes", "falsify")
 
 #: Defaults of --budget and --round.
 DEFAULT_BUDGET = 200
@@ -38,7 +37,7 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
 @click.version_option(package_name="scenario-coverage", message="%(prog)s %(version)s")
 @click.option("-o", "--output-dir", required=True, type=click.Path(file_okay=False),
               help="Folder of the search: search.json and one folder per round (roundN/variants, roundN/results).")
-@click.option("--goal", type=click.Choice(GOALS), default="boundary", show_default=True,
+@click.option("--goal", type=click.Choice(ADAPTIVE), default="boundary", show_default=True,
               help="What the rounds after the first look for: where pass turns to fail, the coverage holes, or "
                    "a failure (the worst value of --objective).")
 @click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_BUDGET, show_default=True, metavar="N",
@@ -61,8 +60,8 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
 @click.option("--maximise", is_flag=True, help="falsify: maximise --objective instead of minimising it.")
 @click.option("--threshold", type=float, metavar="X",
               help="boundary: the value of --objective where pass turns to fail (default: the verdicts).")
-@click.option("--resolution", type=click.FloatRange(min=0, min_open=True, max=1), default=0.01, show_default=True,
-              metavar="F", help="boundary: how finely to locate it, as a share of each range.")
+@click.option("--resolution", type=click.FloatRange(min=0, min_open=True, max=1), default=DEFAULT_RESOLUTION,
+              show_default=True, metavar="F", help="boundary: how finely to locate it, as a share of each range.")
 @click.option("--resume", is_flag=True,
               help="Continue the search of -o where it stopped (Ctrl-C, a lost machine), with the scenario, goal, "
                    "seed, command and job limits it was started with (a larger --budget runs more rounds).")
@@ -73,8 +72,10 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
 @debug_option
 @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
-def command(output_dir, goal, budget, round_size, slots, timeout, grace, retries, simulation, seed, objective,
-            maximise, threshold, resolution, resume, lease, wait, store_url, debug, scenario, command):
+def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int, timeout: float | None,
+            grace: float, retries: int, simulation: str | None, seed: int | None, objective: str | None,
+            maximise: bool, threshold: float | None, resolution: float, resume: bool, lease: float, wait: bool,
+            store_url: str | None, debug: bool, scenario: str | None, command: tuple[str, ...]) -> int:
     """Search the values of SCENARIO (.osc) round by round: round 1 samples its ranges, each later round
     proposes variants from the results of the rounds before it (--goal), until --budget runs are spent or
     the goal is met. Each round is a variation and a batch, as scenario_variation and

@@ -6,6 +6,8 @@ speed²/(2·decel) + speed·reaction > gap), so every run's verdict is checked a
 
 from __future__ import annotations
 
+import json
+import re
 import signal
 import subprocess
 import time
@@ -59,6 +61,29 @@ def test_a_search_spends_its_budget_in_rounds_and_says_so_per_round(tmp_path):
     assert [(r["round"], r["runs"]) for r in record["rounds"]] == [(1, 3), (2, 3), (3, 1)]
     assert sum(r["failed"] for r in record["rounds"]) == sum(1 for _, s, _, _ in runs if s != "passed")
     assert record["settings"]["seed"] == 11 and record["settings"]["budget"] == 7
+    assert [r["strategy"] for r in record["rounds"]] == ["lhs", "boundary", "boundary"]
+    assert "round 2 (boundary)" in rounds[1] and "estimate from 3 earlier run(s): boundary" in rounds[1]
+    for number, strategy in ((1, "lhs"), (2, "boundary"), (3, "boundary")):    # each variant says its round
+        sce = next((tmp_path / "search" / f"round{number}" / "variants").glob("*.sce")).read_text(encoding="utf-8")
+        assert f'# proposal {{"round": {number}, "strategy": "{strategy}"' in sce
+    kept = json.loads((tmp_path / "search" / "round3" / "results" / "search.json").read_text(encoding="utf-8"))
+    assert kept["round"] == 3 and kept["runs_read"] == 6                   # the estimate went with the results
+    assert record["estimate"] == kept["estimate"] and record["runs_read"] == 6
+
+
+def test_a_falsify_search_finds_a_failing_variant_and_the_report_marks_it(tmp_path):
+    write_brake(tmp_path)
+    done = search("brake.osc", "--goal", "falsify", "--objective", "margin", "--budget", "8", "--round", "4",
+                  "-j", "2", "--seed", "2", "-o", "search", cwd=tmp_path)
+    assert done.returncode == 0, done.stdout + done.stderr
+    record = search_file(tmp_path / "search")
+    worst = record["estimate"]["worst"]
+    assert worst is not None and worst["failed"] is True
+    assert fails(worst["assignment"]["brake.speed"], worst["assignment"]["brake.gap"])     # the arithmetic agrees
+    assert re.search(r"^  worst case: margin = -[0-9.]+ \(failed\) at speed=", done.stdout, re.MULTILINE)
+    report = subprocess.run([str(BIN / "scenario_coverage"), "json", "search"], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=300)
+    assert json.loads(report.stdout)["search"]["estimate"]["worst"] == worst
 
 
 def test_a_search_in_a_folder_that_holds_one_is_refused(tmp_path):

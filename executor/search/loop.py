@@ -154,10 +154,10 @@ def _rounds(request: SearchRequest, folder: Path, record: SearchRecord, store: Q
 
 
 def _strategy(request: SearchRequest, place: rounds.RoundPlace) -> str:
-    """Round 1: a plain sampler; later rounds: the goal (a sampler again until the variation reads results)."""
+    """Round 1: a plain sampler; later rounds: the goal."""
     if place.number == 1:
         return rounds.first_strategy(request.settings.scenario, request.settings.round_size)
-    return request.settings.goal if rounds.adaptive_ready() else rounds.FIRST_SAMPLER
+    return request.settings.goal
 
 
 def _round_strategy(place: rounds.RoundPlace, request: SearchRequest) -> str:

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
+from coverage_engine.search import DEFAULT_RESOLUTION
 from executor.batch.errors import BatchUsageError
 
 
@@ -27,7 +28,7 @@ class SearchSettings:
     objective: str | None = None
     maximise: bool = False
     threshold: float | None = None
-    resolution: float = 0.01
+    resolution: float = DEFAULT_RESOLUTION
     #: How each round's jobs run: the launch command (empty: the built-in runner) and the batch's limits.
     command: tuple[str, ...] = ()
     timeout: float | None = None

@@ -11,12 +11,10 @@ is kept out of the search's output unless ``-d`` is given; their warnings and er
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import io
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from coverage_engine.search_record import RESULTS_FOLDER, VARIANTS_FOLDER, round_folder
 from coverage_engine.suffixes import SCE_SUFFIX
@@ -73,27 +71,19 @@ def first_strategy(scenario: str, samples: int) -> str:
     return "full" if math.prod(parsed.sizes) <= samples else FIRST_SAMPLER
 
 
-def adaptive_ready() -> bool:
-    """Whether the variation reads earlier results (``--from``, issue 35 items 1-4)."""
-    return "from_results" in VariationRequest.__dataclass_fields__
-
-
 def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, samples: int,
                       sources: tuple[Path, ...]) -> VariationRequest:
     """The variation of one round: round 1 a plain sampler, later rounds the goal's strategy reading
     ``sources`` (the results folders of every earlier round)."""
     settings = request.settings
     seed = settings.seed + place.number - 1        # each round its own draw, the same again on --resume
-    base = VariationRequest(scenario=settings.scenario, output_dir=str(place.variants), store=request.store,
-                            strategy=strategy, samples=None if strategy == "full" else samples, seed=seed,
-                            debug=request.debug)
-    if not adaptive_ready():
-        return base
-    extra: dict[str, Any] = {"round_number": place.number}
-    if sources:
-        extra.update(from_results=tuple(str(s) for s in sources), objective=settings.objective,
-                     maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
-    return dataclasses.replace(base, **extra)
+    variation = VariationRequest(scenario=settings.scenario, output_dir=str(place.variants), store=request.store,
+                                 strategy=strategy, samples=None if strategy == "full" else samples, seed=seed,
+                                 debug=request.debug, round_number=place.number)
+    if not sources:
+        return variation
+    return replace(variation, from_results=tuple(str(s) for s in sources), objective=settings.objective,
+                   maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
 
 
 def write_variants(variation: VariationRequest, *, show: bool) -> int:

@@ -68,7 +68,31 @@ def test_a_search_spends_its_budget_in_rounds_and_says_so_per_round(tmp_path):
         assert f'# proposal {{"round": {number}, "strategy": "{strategy}"' in sce
     kept = json.loads((tmp_path / "search" / "round3" / "results" / "search.json").read_text(encoding="utf-8"))
     assert kept["round"] == 3 and kept["runs_read"] == 6                   # the estimate went with the results
-    assert record["estimate"] == kept["estimate"] and record["runs_read"] == 6
+
+
+def test_the_search_ends_with_an_estimate_from_every_round_the_last_included(tmp_path):
+    """Each round's estimate is made before it runs; the search's own is made again after its last round:
+    it is what scenario_variation --from estimates from every round's results."""
+    write_brake(tmp_path)
+    done = search("brake.osc", "--budget", "7", "--round", "3", "-j", "2", "--seed", "11", "-o", "search",
+                  cwd=tmp_path)
+    assert done.returncode == 0, done.stdout + done.stderr
+    record = search_file(tmp_path / "search")
+    assert record["round"] == 3 and record["runs_read"] == 7                   # round 3's run is counted
+    results = [str((tmp_path / "search" / f"round{n}" / "results").resolve()) for n in (1, 2, 3)]
+    assert record["from"] == results
+    sources = [arg for folder in results for arg in ("--from", folder)]
+    check = subprocess.run([str(BIN / "scenario_variation"), "brake.osc", *sources, "--strategy", "boundary",
+                            "--samples", "1", "-o", "check"], cwd=tmp_path, env=cli_env(tmp_path),
+                           capture_output=True, text=True, timeout=300)
+    assert check.returncode == 0, check.stdout + check.stderr
+    again = json.loads((tmp_path / "check" / "search.json").read_text(encoding="utf-8"))
+    assert again["runs_read"] == 7 and again["estimate"] == record["estimate"]
+    said = check.stdout.splitlines()
+    estimate = said[said.index("round 4, strategy boundary: 7 earlier run(s) read") + 1:]
+    words = done.stdout.splitlines()
+    last = words[next(i for i, line in enumerate(words) if line.startswith("search done:")) + 1:]
+    assert last == [f"  {line}" for line in estimate[:len(last)]] and last[-1].startswith("  goal ")
 
 
 def test_a_falsify_search_finds_a_failing_variant_and_the_report_marks_it(tmp_path):

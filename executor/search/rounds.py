@@ -16,7 +16,13 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from coverage_engine.search_record import RESULTS_FOLDER, VARIANTS_FOLDER, round_folder
+from coverage_engine.search_record import (
+    RESULTS_FOLDER,
+    VARIANTS_FOLDER,
+    RoundSummary,
+    SearchRecord,
+    round_folder,
+)
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.batch import orchestration
 from executor.batch.errors import BatchError
@@ -84,6 +90,20 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
         return variation
     return replace(variation, from_results=tuple(str(s) for s in sources), objective=settings.objective,
                    maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
+
+
+def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummary, ...]) -> SearchRecord:
+    """The goal's estimate from the results of every round in ``done`` (the last one included), proposing
+    nothing; it is kept as the estimate of the last round."""
+    from coverage_engine.search.propose import SearchOptions
+    from executor.variation.search import estimate_only
+
+    settings = request.settings
+    last = done[-1].round
+    sources = tuple(str(RoundPlace.of(str(folder), r.round).results) for r in done)
+    options = SearchOptions(settings.goal, settings.round_size, settings.seed + last, sources, settings.objective,
+                            settings.maximise, settings.threshold, settings.resolution, last)
+    return estimate_only(Path(settings.scenario), options)
 
 
 def write_variants(variation: VariationRequest, *, show: bool) -> int:

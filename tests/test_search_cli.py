@@ -13,7 +13,7 @@ import subprocess
 import time
 from pathlib import Path
 
-from batch_fixtures import STARTED, cli_env
+from batch_fixtures import STARTED, cli_env, start_cli
 from search_support import fails, round_runs, search_file, write_brake
 
 from store.queue import QueueStore
@@ -222,3 +222,36 @@ def test_a_search_queues_its_rounds_in_a_postgresql_store(tmp_path, pg_url):
     finally:
         store.close()
     assert len(_check_verdicts(tmp_path / "search", 2)) == 4
+
+
+def test_enqueue_only_leaves_each_round_to_the_workers_and_waits_for_it(tmp_path, pg_url):
+    """--enqueue-only: each round's jobs go into the shared PostgreSQL store, a worker (another process; on
+    another host it would be the same) runs them, and the search proposes the next round only once the
+    round has finished: round 2 is estimated from all of round 1."""
+    write_brake(tmp_path)
+    host = tmp_path / "worker_host"
+    host.mkdir()
+    worker = start_cli(["worker", "--store", pg_url, "--wait", "--poll", "0.1", "-j", "2"], host, cli_env(host))
+    try:
+        done = search("brake.osc", "--budget", "6", "--round", "3", "--seed", "4", "--store", pg_url,
+                      "--enqueue-only", "-o", "search", cwd=tmp_path)
+    finally:
+        worker.send_signal(signal.SIGINT)
+        worked, _ = worker.communicate(timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.count("queued in the shared store; waiting for 'scenario_batch_execution worker") == 2
+    assert "search done: 6 run(s) in 2 round(s)" in done.stdout
+    runs = _check_verdicts(tmp_path / "search", 2)            # the search wrote each round's report
+    assert len(runs) == 6
+    kept = json.loads((tmp_path / "search" / "round2" / "results" / "search.json").read_text(encoding="utf-8"))
+    assert kept["runs_read"] == 3                             # round 2 was proposed from every run of round 1
+    store = QueueStore.open(pg_url)
+    try:
+        for number in (1, 2):
+            batch = store.latest_batch(output_dir=str((tmp_path / "search" / f"round{number}" / "results").resolve()))
+            assert batch is not None and batch.mode == "shared"
+            jobs = store.jobs(batch.id)
+            assert len(jobs) == 3 and all(j.status in FINAL and j.worker_pid == worker.pid for j in jobs)
+    finally:
+        store.close()
+    assert sum(1 for line in worked.splitlines() if re.match(r"\[\d+\] (passed|failed) +brake\d", line)) == 6, worked

@@ -46,9 +46,7 @@ EXIT_DONE = 0
 EXIT_STOPPED = EXIT_INTERRUPTED[signal.SIGINT]
 
 
-def say(text: str) -> None:
-    """One line for people on stdout, flushed so it interleaves with the warnings on stderr."""
-    print(printable(text), flush=True)
+say = rounds.say
 
 
 class _QuietReporter(Reporter):

@@ -79,9 +79,11 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol", *
               help="The round written in each variant's proposal line (default: one more than the highest read).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())
 @click.pass_context
-def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
-            strategy, strength, samples, seed, wait, only_new, from_results, objective, maximise, threshold,
-            resolution, pass_rate, along, round_number):
+def command(ctx: click.Context, scenarios: tuple[str, ...], output_dir: str, debug: bool, log_model: bool,
+            list_only: bool, store_url: str | None, scenario_parameter_file: str | None, max_variants: int,
+            strategy: str, strength: int, samples: int | None, seed: int | None, wait: bool, only_new: bool,
+            from_results: tuple[str, ...], objective: str | None, maximise: bool, threshold: float | None,
+            resolution: float, pass_rate: float | None, along: str | None, round_number: int | None) -> int:
     """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
     folder: its .osc files).
 

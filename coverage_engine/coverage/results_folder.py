@@ -26,6 +26,7 @@ from coverage_engine.coverage.errors import ResultsError, RunFileError
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
+from coverage_engine.coverage.search_rounds import SearchRuns
 from coverage_engine.domains import (
     HEADER_CHARS,
     InputDomain,
@@ -43,6 +44,7 @@ from coverage_engine.results.verdicts import (
     iter_suite_verdicts,
     run_verdict,
 )
+from coverage_engine.search_record import SearchRecord, read_search_record, round_folder, round_folders
 from coverage_engine.suffixes import SCE_SUFFIX
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
@@ -305,6 +307,11 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
         raise ResultsError("not a folder (give a results folder or a run's output folder)",
                            Location.whole_file(str(given)))
     root = given.resolve()
+    search = read_search_record(root)
+    if search is not None:
+        rounds = round_folders(root)
+        if rounds:
+            return _search_folder(given, search, rounds)
     reader = _Reader(root)
     source = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(root))
     source.declare(read_declared(str(root / DECLARED_FILE)))     # the batch's record; .sce headers add to it
@@ -337,7 +344,44 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
             source.declare(domains)
 
     source.runs = stream()
+    if search is not None:
+        source.search = SearchRuns(search)
+        source.runs = _one_round(source.runs, source.search)
     return source
+
+
+def _one_round(runs: Iterator[RunInput], collected: SearchRuns) -> Iterator[RunInput]:
+    """The runs of one round's results folder (its ``search.json`` names the round), noted as that round's."""
+    for run in runs:
+        collected.add(run.name, run.verdict, collected.record.round, run.assignment)
+        yield run
+
+
+def _search_folder(given: Path, record: SearchRecord, rounds: list[tuple[int, Path]]) -> RunSource:
+    """The runs of a search's folder (``scenario_search -o DIR``): every round's results folder as one
+    source, each run named after its round (``round2/brake0``: the rounds name their variants alike)."""
+    parts = [(number, path, read_results_folder(path)) for number, path in rounds]    # each checked first
+    combined = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(given.resolve()))
+    collected = combined.search = SearchRuns(record)
+
+    def stream() -> Iterator[RunInput]:
+        for number, path, part in parts:
+            folder = round_folder(number)
+            for run in part.runs:
+                run.name = f"{folder}/{run.name}"
+                collected.add(run.name, run.verdict, number, run.assignment)
+                yield run
+            kept = read_search_record(path)
+            if kept is not None and kept.strategy:
+                collected.name_round(number, kept.strategy)
+            combined.complete = combined.complete and part.complete
+            combined.notes.extend(f"{folder}: {note}" for note in part.notes)
+            combined.warnings.extend(part.warnings)
+            combined.declare(part.domains.values())
+        combined.notes.insert(0, f"a search of {len(parts)} round(s): {', '.join(round_folder(n) for n, _ in rounds)}")
+
+    combined.runs = stream()
+    return combined
 
 
 def _holds_jobs(folder: Path) -> bool:

@@ -45,7 +45,7 @@ class Compare(ActionBase):
         #: The run's ``note_check_margin`` (the runtime's context hands it over in ``setup``), if any.
         self.note_margin: Callable[[float], None] | None = None
 
-    def setup(self, **kwargs) -> None:
+    def setup(self, **kwargs: Any) -> None:
         note = getattr(kwargs.get("context"), "note_check_margin", None)
         self.note_margin = note if callable(note) else None
 

@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, BinaryIO, Protocol
+from typing import IO, Any, BinaryIO, Protocol
 
 _CHUNK = 64 * 1024
 
@@ -234,7 +234,7 @@ class ChildProcess:
                 self._arm_locked(self.timeout, self._on_timeout)
             return self.proc.pid
 
-    def _spawn(self, stdin, stdout) -> subprocess.Popen[bytes]:
+    def _spawn(self, stdin: int | None, stdout: int | IO[bytes] | None) -> subprocess.Popen[bytes]:
         return subprocess.Popen(
             self.argv, cwd=self.cwd, stdin=stdin, stdout=stdout,
             stderr=None if stdout is None else subprocess.STDOUT,
@@ -261,7 +261,7 @@ class ChildProcess:
                 self._cancel_locked(self.grace if self._grace_asked is None else self._grace_asked)
             return proc.pid
 
-    def _fork(self, log, ticket: StartTicket):
+    def _fork(self, log: IO[bytes], ticket: StartTicket) -> Any:
         """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""
         assert self.launcher is not None
         if self.echo is None:
@@ -350,7 +350,7 @@ class ChildProcess:
         self._signal_locked(signal.SIGINT)
         self._arm_kill_locked(grace)
 
-    def _arm_locked(self, delay: float, action) -> None:
+    def _arm_locked(self, delay: float, action: Callable[[], None]) -> None:
         timer = threading.Timer(delay, action)
         timer.daemon = True
         self._timers.append(timer)

@@ -16,6 +16,8 @@ from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import RunOrigin
 
 if TYPE_CHECKING:
+    import py_trees
+
     from executor.runtime.coverage_sampling import CoverageSampler
     from executor.runtime.simulation import Clock
 
@@ -23,7 +25,7 @@ if TYPE_CHECKING:
 class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error
     """``emit end`` (success) or ``emit fail`` (failure): ends the scenario immediately."""
 
-    def __init__(self, success: bool, message: str = "", behaviour=None) -> None:
+    def __init__(self, success: bool, message: str = "", behaviour: py_trees.behaviour.Behaviour | None = None) -> None:
         super().__init__(message or ("end" if success else "fail"))
         self.success = success
         self.message = message

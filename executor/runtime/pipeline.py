@@ -15,12 +15,24 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from coverage_engine.domains import drawn_units_of
 from coverage_engine.errors import OscError, UserError
 from coverage_engine.results.files import RESULT_FILE
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.runtime.logger import Logger
+
+if TYPE_CHECKING:   # imported on the paths that need them (-h and option errors stay quick)
+    from coverage_engine.files.sce import SceDocument
+    from coverage_engine.resolve.model import ScenarioFile
+    from coverage_engine.results.run_report import ReportNames
+    from executor.runtime.planned_runs import PlannedRun
+    from executor.runtime.session import SessionOutcome
+    from executor.runtime.simulation import UserSimulation
+
+    #: A resolved file and the output folder of each of its scenarios (``_output_dir`` of one document).
+    LoadedFile = tuple[ScenarioFile, dict[str, str]]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -81,7 +93,7 @@ def _check_options(request: ExecutionRequest) -> None:
 PROGRESS_FROM = 2000
 
 
-def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None):
+def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None) -> list[LoadedFile]:
     """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``.
 
     A parameter-file error without a location is pointed at the file (at the key, when the message
@@ -123,7 +135,7 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
     return loaded
 
 
-def _variant(scenario: str):
+def _variant(scenario: str) -> SceDocument | None:
     """The ``.sce`` document of a variant (None for an ``.osc``, or a ``.sce`` that cannot be read)."""
     if not scenario.endswith(SCE_SUFFIX):
         return None
@@ -143,7 +155,7 @@ def _located(exc: OscError, scenario: str) -> str:
     return exc.located(variant_lines(document).place if document is not None else str)
 
 
-def report_names(scenario: str, runs=(), document=None):
+def report_names(scenario: str, runs: Sequence[PlannedRun] = (), document: SceDocument | None = None) -> ReportNames:
     """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header,
     ``document`` when it was read already)."""
     from coverage_engine.results.run_report import report_names as names_for
@@ -201,7 +213,7 @@ def execute(request: ExecutionRequest) -> int:
     return _run(request, loaded, output_root, logger)
 
 
-def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
+def _run(request: ExecutionRequest, loaded: list[LoadedFile], output_root: str | None, logger: Logger) -> int:
     from coverage_engine.files.sce import variant_lines
     from coverage_engine.resolve.evaluate import add_import_paths
     from executor.runtime.planned_runs import RunOrigin, plan_runs
@@ -223,22 +235,7 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED
 
-    simulation = None
-    if request.simulation:
-        from executor.runtime.simulation import SimulationError, load_simulation, simulation_dt
-
-        try:
-            simulation = load_simulation(request.simulation)
-            simulation_dt(simulation)
-        except SimulationError as exc:
-            if output_root:  # CI sees that nothing ran, and why
-                from coverage_engine.results.run_report import write_grouped
-                from coverage_engine.results.scenario_result import ScenarioResult
-
-                write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
-                              output_root, request.per_scenario, names)
-            raise UsageProblem(str(exc)) from exc
-
+    simulation = _load_simulation(request, runs, output_root, names) if request.simulation else None
     if request.dot:
         from executor.runtime.dot import write_dot_files
 
@@ -268,6 +265,32 @@ def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Log
     if report is not None:  # what the last update did not see (the aborted and skipped scenarios)
         for path in report.update(outcome.results, final=True):
             logger.debug(f"wrote {path}")
+    return _finish(request, outcome, output_root, logger)
+
+
+def _load_simulation(request: ExecutionRequest, runs: list[PlannedRun], output_root: str | None,
+                     names: ReportNames | None) -> UserSimulation:
+    """The ``--simulation`` object; one that cannot load is a usage problem, and with ``-o`` every run's
+    testcase says why nothing ran (CI sees it)."""
+    from executor.runtime.simulation import SimulationError, load_simulation, simulation_dt
+
+    assert request.simulation is not None
+    try:
+        simulation = load_simulation(request.simulation)
+        simulation_dt(simulation)
+    except SimulationError as exc:
+        if output_root:
+            from coverage_engine.results.run_report import write_grouped
+            from coverage_engine.results.scenario_result import ScenarioResult
+
+            write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
+                          output_root, request.per_scenario, names)
+        raise UsageProblem(str(exc)) from exc
+    return simulation
+
+
+def _finish(request: ExecutionRequest, outcome: SessionOutcome, output_root: str | None, logger: Logger) -> int:
+    """After the runs: the post-run hooks (not after an abort), the closing line, the exit code."""
     if outcome.aborted:
         if request.post_run:
             logger.warning("aborted: --post-run commands skipped")

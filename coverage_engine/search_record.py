@@ -21,7 +21,10 @@ file has the same fields for its latest estimate, plus ``rounds`` (the runs and 
      "rounds": [{"round": 1, "strategy": "lhs", "runs": 40, "failed": 3}, ...], "settings": {...}}
 
 ``axes`` is filled where the boundary is one-dimensional; ``variants`` lists the runs on either side of
-it; ``pairs`` counts the neighbouring runs that disagree and ``located`` those within the resolution.
+it; ``pairs`` counts the neighbouring runs that disagree and ``located`` those within the resolution. With
+``boundary --pass-rate`` the boundary also holds ``"pass_rate": {"rate": 0.5, "along": KEY, "levels": [{"value":
+V, "runs": 8, "passed": 3, "side": "below"}, ...]}`` (``side``: ``above`` means at or above the rate, null while
+undecided), and ``axes`` the crossing along KEY once a level on each side is decided.
 ``done`` says the goal is met. The adaptive strategies build these values (:mod:`coverage_engine.search`
 sits above this module), the search loop and the coverage report read them back, and all of them say an
 estimate with :func:`estimate_lines`, so it reads the same everywhere. A file that is not there, not JSON
@@ -81,6 +84,9 @@ def round_folders(folder: str | os.PathLike[str]) -> list[tuple[int, Path]]:
 #: A run's assignment as stored (parameter key -> value), in the order the run lists them.
 Assignment = Mapping[str, object]
 
+#: The sides of ``--pass-rate`` a level is decided on: at or above the rate, or below it.
+ABOVE, BELOW = "above", "below"
+
 #: Most boundary variants kept in an estimate (the file stays small; the runs are in the results).
 MAX_BOUNDARY_VARIANTS = 200
 
@@ -96,6 +102,26 @@ class AxisBoundary:
 
 
 @dataclass(frozen=True)
+class LevelRate:
+    """``--pass-rate``: one level run along the parameter, its runs and passes, and the side of the rate it is
+    decided on (``above`` means at or above; None while its other cells could still tip it)."""
+
+    value: object
+    runs: int
+    passed: int
+    side: str | None
+
+
+@dataclass(frozen=True)
+class PassRateEstimate:
+    """``boundary --pass-rate R --along KEY``: the rate, the parameter, and what each level run so far gave."""
+
+    rate: float
+    along: str
+    levels: tuple[LevelRate, ...] = ()
+
+
+@dataclass(frozen=True)
 class BoundaryEstimate:
     """The boundary located so far: per axis (key -> :class:`AxisBoundary`) where it is one-dimensional,
     the runs beside it, how many neighbouring pairs of runs disagree (``pairs``) and how many of those are
@@ -105,6 +131,8 @@ class BoundaryEstimate:
     variants: tuple[Assignment, ...] = ()
     pairs: int = 0
     located: int = 0
+    #: With ``--pass-rate``: the levels run along the parameter and their pass rates.
+    pass_rate: PassRateEstimate | None = None
 
 
 @dataclass(frozen=True)
@@ -195,7 +223,23 @@ def _boundary(value: object) -> BoundaryEstimate | None:
     variants = value.get("variants")
     listed = tuple(_assignment(v) for v in variants) if isinstance(variants, list) else ()
     return BoundaryEstimate(axes, tuple(v for v in listed if v), _count(value.get("pairs")),
-                            _count(value.get("located")))
+                            _count(value.get("located")), _pass_rate(value.get("pass_rate")))
+
+
+def _pass_rate(value: object) -> PassRateEstimate | None:
+    if not isinstance(value, dict):
+        return None
+    rate = _number(value.get("rate"))
+    along = value.get("along")
+    if rate is None or not isinstance(along, str):
+        return None
+    levels = []
+    for level in value.get("levels") or () if isinstance(value.get("levels"), list) else ():
+        if isinstance(level, dict) and isinstance(level.get("value"), (str, int, float)):
+            side = level.get("side")
+            levels.append(LevelRate(level["value"], _count(level.get("runs")), _count(level.get("passed")),
+                                    side if side in (ABOVE, BELOW) else None))
+    return PassRateEstimate(rate, along, tuple(levels))
 
 
 def _worst(value: object) -> WorstCase | None:
@@ -267,6 +311,12 @@ def _finite(value: float | None) -> float | None:
     return value if value is not None and math.isfinite(value) else None
 
 
+def _rate_dict(rates: PassRateEstimate) -> dict[str, Any]:
+    return {"rate": rates.rate, "along": rates.along,
+            "levels": [{"value": level.value, "runs": level.runs, "passed": level.passed, "side": level.side}
+                       for level in rates.levels]}
+
+
 def estimate_dict(estimate: Estimate) -> dict[str, Any]:
     """The ``estimate`` of a ``search.json`` (the form :func:`parse_search_record` reads)."""
     boundary = estimate.boundary
@@ -277,7 +327,8 @@ def estimate_dict(estimate: Estimate) -> dict[str, Any]:
             "axes": {key: {"value": _finite(axis.value), "error": _finite(axis.error), "unit": axis.unit}
                      for key, axis in boundary.axes.items()},
             "variants": [dict(v) for v in boundary.variants[:MAX_BOUNDARY_VARIANTS]],
-            "pairs": boundary.pairs, "located": boundary.located},
+            "pairs": boundary.pairs, "located": boundary.located,
+            **({} if boundary.pass_rate is None else {"pass_rate": _rate_dict(boundary.pass_rate)})},
         "worst": None if worst is None else {"objective": worst.objective, "value": _finite(worst.value),
                                              "assignment": dict(worst.assignment), "failed": worst.failed},
         "holes": None if holes is None else {"targeted": holes.targeted, "guessed": holes.guessed},
@@ -352,6 +403,8 @@ def estimate_summary(estimate: Estimate) -> str:
     boundary = estimate.boundary
     if boundary is not None and boundary.axes:
         parts.append("boundary " + "; ".join(axis_text(k, a) for k, a in boundary.axes.items()))
+    elif boundary is not None and boundary.pass_rate is not None:
+        parts.append(f"pass rate of {rate_text(boundary.pass_rate.rate)} not crossed between decided levels yet")
     elif boundary is not None and boundary.pairs:
         parts.append(f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located} "
                      "located")
@@ -369,8 +422,28 @@ def estimate_summary(estimate: Estimate) -> str:
     return ", ".join(parts) or "no estimate yet"
 
 
+def rate_text(rate: float) -> str:
+    """``50 %``."""
+    return f"{rate * 100:.4g} %"
+
+
+def _rate_lines(rates: PassRateEstimate) -> list[str]:
+    """The pass rate of each level run, and which side of the rate each is decided on."""
+    shown = rate_text(rates.rate)
+    sides = {ABOVE: f"at or above {shown}", BELOW: f"below {shown}", None: "not decided yet"}
+    parts = [f"{value_text(level.value)}: {level.passed} of {level.runs} passed ({sides[level.side]})"
+             for level in rates.levels]
+    return [f"pass rate along {short_key(rates.along)}: " + ("; ".join(parts) if parts else "no run yet")]
+
+
 def _boundary_lines(boundary: BoundaryEstimate) -> list[str]:
     lines = [f"boundary: {axis_text(key, axis)}" for key, axis in boundary.axes.items()]
+    if boundary.pass_rate is not None:
+        rates = boundary.pass_rate
+        if not boundary.axes:
+            lines.append(f"boundary: not seen yet (no level of {short_key(rates.along)} decided on each side of "
+                         f"{rate_text(rates.rate)})")
+        return lines + _rate_lines(rates)
     if boundary.axes:
         return lines
     if boundary.pairs:

@@ -72,10 +72,10 @@ def test_pass_rate_boundary_finds_the_level_where_half_the_runs_fail_in_fewer_ru
         if level["side"] is not None:
             assert (level["side"] == "above") == (passing_share(level["value"]) >= 0.5), level
         assert level["passed"] <= level["runs"] <= 8
-    assert "boundary: sweep.noise = 5.5 ± 0.5" in out and "goal met" in out
+    assert "boundary: noise = 5.5 ± 0.5" in out and "goal met" in out
     sides = {level["value"]: level["side"] for level in boundary["pass_rate"]["levels"]}
     assert sides[5] == "above" and sides[6] == "below"
-    assert "pass rate along sweep.noise: " in out and "; 6: " in out and "(below 50 %)" in out
+    assert "pass rate along noise: " in out and "; 6: " in out and "(below 50 %)" in out
     assert runs <= 40, f"{runs} runs (the full grid takes 64)"
     print(f"{runs} runs")
 

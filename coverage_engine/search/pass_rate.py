@@ -29,11 +29,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from coverage_engine.search.space import Point, Space
+from coverage_engine.search_record import ABOVE, BELOW
 
 #: Runs that stand for a level's pass rate when the other axes have more cells than this (or a continuous one).
 RATE_RUNS = 16
 
-ABOVE, BELOW = "above", "below"
+
 
 
 @dataclass(frozen=True)

@@ -35,8 +35,6 @@ from coverage_engine.search_record import ABOVE, BELOW
 RATE_RUNS = 16
 
 
-
-
 @dataclass(frozen=True)
 class RateRun:
     """A run where it sits in the unit cube and whether it passed."""

@@ -30,7 +30,7 @@ DEFAULT_ROUND = 40
 
 #: The settings --resume compares with the search's own (the click parameters share these names).
 SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objective", "maximise", "threshold",
-                   "resolution", "command", "timeout", "grace", "retries", "simulation")
+                   "resolution", "pass_rate", "along", "command", "timeout", "grace", "retries", "simulation")
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
@@ -62,6 +62,12 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
               help="boundary: the value of --objective where pass turns to fail (default: the verdicts).")
 @click.option("--resolution", type=click.FloatRange(min=0, min_open=True, max=1), default=DEFAULT_RESOLUTION,
               show_default=True, metavar="F", help="boundary: how finely to locate it, as a share of each range.")
+@click.option("--pass-rate", type=click.FloatRange(min=0, max=1, min_open=True), metavar="R",
+              help="boundary: seek the level of --along KEY where the share of passing runs over the other "
+                   "parameters crosses R (e.g. 0.5), instead of where single runs flip.")
+@click.option("--along", metavar="KEY",
+              help="boundary with --pass-rate: the varied parameter (its key, or a dotted part of it) whose level "
+                   "is sought.")
 @click.option("--resume", is_flag=True,
               help="Continue the search of -o where it stopped (Ctrl-C, a lost machine), with the scenario, goal, "
                    "seed, command and job limits it was started with (a larger --budget runs more rounds).")
@@ -77,7 +83,8 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int, timeout: float | None,
             grace: float, retries: int, simulation: str | None, seed: int | None, objective: str | None,
-            maximise: bool, threshold: float | None, resolution: float, resume: bool, lease: float, enqueue_only: bool,
+            maximise: bool, threshold: float | None, resolution: float, pass_rate: float | None,
+            along: str | None, resume: bool, lease: float, enqueue_only: bool,
             wait: bool,
             store_url: str | None, debug: bool, scenario: str | None, command: tuple[str, ...]) -> int:
     """Search the values of SCENARIO (.osc) round by round: round 1 samples its ranges, each later round
@@ -110,7 +117,8 @@ def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int
         seed = secrets.randbelow(2**31)
     settings = SearchSettings(scenario=os.path.abspath(scenario) if scenario else "", goal=goal, budget=budget,
                               round_size=round_size, seed=seed or 0, objective=objective, maximise=maximise,
-                              threshold=threshold, resolution=resolution, command=tuple(command),
+                              threshold=threshold, resolution=resolution, pass_rate=pass_rate, along=along,
+                              command=tuple(command),
                               timeout=timeout, grace=grace, retries=retries, simulation=simulation)
     ctx = click.get_current_context()
     typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)

@@ -29,6 +29,9 @@ class SearchSettings:
     maximise: bool = False
     threshold: float | None = None
     resolution: float = DEFAULT_RESOLUTION
+    #: boundary: the share of passing runs whose crossing along ``along`` (a varied parameter) is sought.
+    pass_rate: float | None = None
+    along: str | None = None
     #: How each round's jobs run: the launch command (empty: the built-in runner) and the batch's limits.
     command: tuple[str, ...] = ()
     timeout: float | None = None

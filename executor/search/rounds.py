@@ -99,7 +99,8 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
     if not sources:
         return variation
     return replace(variation, from_results=tuple(str(s) for s in sources), objective=settings.objective,
-                   maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
+                   maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution,
+                   pass_rate=settings.pass_rate, along=settings.along)
 
 
 def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummary, ...]) -> SearchRecord:
@@ -112,7 +113,8 @@ def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummar
     last = done[-1].round
     sources = tuple(str(RoundPlace.of(str(folder), r.round).results) for r in done)
     options = SearchOptions(settings.goal, settings.round_size, settings.seed + last, sources, settings.objective,
-                            settings.maximise, settings.threshold, settings.resolution, last)
+                            settings.maximise, settings.threshold, settings.resolution, last,
+                            pass_rate=settings.pass_rate, along=settings.along)
     return estimate_only(Path(settings.scenario), options)
 
 

@@ -70,9 +70,11 @@ class StartTicket:
 class Launcher(Protocol):
     """Starts a command some other way than ``exec`` (the built-in runner forks it from a warm server)."""
 
-    def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], output_fd: int,
-              stdout: BinaryIO | None = None, ticket: StartTicket | None = None) -> Any:
-        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``; a Popen-like object,
+    def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
+              output_fd: int | None = None, stdout: BinaryIO | None = None, ticket: StartTicket | None = None,
+              log_path: str | None = None, append: bool = False) -> Any:
+        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``, or on the file
+        ``log_path`` that the launcher opens itself (truncated, or appended to); a Popen-like object,
         or None when ``ticket`` was withdrawn before the start (it may wait for a free slot)."""
 
 
@@ -247,8 +249,12 @@ class ChildProcess:
             if self._cancelled:
                 return None
             ticket = self._ticket = StartTicket(self.on_sent)
-        with open(self.log_path, "ab" if self.append else "wb") as log:  # type: ignore[arg-type]
-            proc = self._fork(log, ticket)
+        assert self.launcher is not None and self.log_path is not None
+        if self.echo is None:                    # the launcher opens the log: no file made here
+            proc = self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env, ticket=ticket,
+                                       log_path=os.path.abspath(self.log_path), append=self.append)
+        else:
+            proc = self._fork_echoing(ticket)
         self._started_at = time.time()
         with self._lock:
             self._ticket = None
@@ -261,12 +267,11 @@ class ChildProcess:
                 self._cancel_locked(self.grace if self._grace_asked is None else self._grace_asked)
             return proc.pid
 
-    def _fork(self, log, ticket: StartTicket):
-        """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""
-        assert self.launcher is not None
-        if self.echo is None:
-            return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
-                                       output_fd=log.fileno(), ticket=ticket)
+    def _fork_echoing(self, ticket: StartTicket):
+        """Have the launcher fork the command, its output going to a pipe (copied to the log and the echo)."""
+        assert self.launcher is not None and self.log_path is not None
+        with open(self.log_path, "ab" if self.append else "wb"):
+            pass                                 # made now, as the log of a launched command is
         read_end, write_end = os.pipe()
         stdout = os.fdopen(read_end, "rb")
         try:

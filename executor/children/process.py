@@ -21,6 +21,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, BinaryIO, Protocol
 
+from executor.children.spawn import SpawnedProcess, can_spawn_logged, spawn_logged
+
 _CHUNK = 64 * 1024
 
 #: Errors that mean "the disk is full", whoever met them.
@@ -198,7 +200,7 @@ class ChildProcess:
         self.extra_env = dict(environment or {})
         if marker is not None:
             self.extra_env[JOB_ENV] = marker
-        self.proc: subprocess.Popen[bytes] | None = None
+        self.proc: subprocess.Popen[bytes] | SpawnedProcess | None = None
         self._lock = threading.Lock()
         self._timers: list[threading.Timer] = []
         self._timed_out = False
@@ -228,6 +230,9 @@ class ChildProcess:
                 return None
             if self.log_path is None:
                 self.proc = self._spawn(None, None)
+            elif self.echo is None and can_spawn_logged(self.cwd):     # the child opens its log
+                self.proc = spawn_logged(self.argv, self.log_path, append=self.append,
+                                         extra_environment=self.extra_env)
             else:
                 with open(self.log_path, "ab" if self.append else "wb") as log:
                     self.proc = self._spawn(subprocess.DEVNULL,

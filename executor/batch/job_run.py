@@ -39,6 +39,8 @@ class Started:
     pid: int
     #: When the child started (``time.monotonic``): the worker writes the record only once it is this old.
     at: float = field(default_factory=time.monotonic)
+    #: The same moment by the wall clock, recorded as the job's start.
+    began: float = field(default_factory=time.time)
 
 
 @dataclass

@@ -188,7 +188,7 @@ class ForkServer:
             if ticket is not None and not ticket.on_withdraw(lambda: self._withdraw(request_id)):
                 self._forget(request_id)
                 return None
-            request = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)}
+            request: dict[str, object] = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)}
             if output_fd is None:
                 request.update(log=log_path, append=append)
             try:

@@ -2,9 +2,12 @@
 
 Exit codes, the same for all commands: 0 success · 1 a runtime error (bad input, a file or store
 problem) or a failed result · 2 a usage error (click's own, or one the command declares) · 130
-interrupted (Ctrl-C; SIGTERM where the command maps it). Messages: an
-:class:`~coverage_engine.errors.OscError` as ``file:line:col: error: …`` with the source line and a
-caret; anything else as ``error: …``. A command run by scripts on many hosts
+interrupted (Ctrl-C; SIGTERM where the command maps it). Every error a user can cause is a
+:class:`~coverage_engine.errors.UserError` (the scenario's, the store's, the batch's, the command line's),
+and only here does one become a message: ``file:line:col: error: …`` with the source line and a caret
+where it has a place, ``file: error: …`` for a whole file, ``error: …`` otherwise; exit 2 when it is a
+malformed command line (:attr:`~coverage_engine.errors.UserError.usage`), else 1. An :class:`OSError`
+says ``error: <reason>: <file>``. A command run by scripts on many hosts
 (``scenario_batch_execution``) asks for one line per message, prefixed by its name. A traceback is
 shown only with ``-d/--debug``, which the shared option reports here while the command line is parsed
 (:func:`cli.options.debug_option`); an error of ours that no one expected says "internal error".
@@ -18,29 +21,22 @@ from typing import NoReturn
 
 import click
 
-from coverage_engine.errors import OscError
+from coverage_engine.errors import UserError
 from coverage_engine.printable import printable_lines
 
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
-ErrorTypes = tuple[type[BaseException], ...]
-
 
 class Boundary:
     """Runs one click command and maps whatever escapes it; ``prog`` is the name in usage texts.
 
-    ``runtime_errors`` are the command's own expected errors (message, exit 1); ``usage_errors`` its
-    own malformed-command-line errors (exit 2, like click's). ``one_line_name``: print every message on
-    one line as ``<name>: error: …``.
+    ``one_line_name``: print every message on one line as ``<name>: error: …``.
     """
 
-    def __init__(self, prog: str, *, runtime_errors: ErrorTypes = (), usage_errors: ErrorTypes = (),
-                 one_line_name: str | None = None) -> None:
+    def __init__(self, prog: str, *, one_line_name: str | None = None) -> None:
         self.prog = prog
-        self.runtime_errors = runtime_errors
-        self.usage_errors = usage_errors
         self.one_line_name = one_line_name
         self.tracebacks = False
 
@@ -54,8 +50,8 @@ class Boundary:
 
     def report(self, exc: Exception) -> int:
         """Say one error of a command that goes on after it (one of several input files); its exit code."""
-        if isinstance(exc, OscError):
-            self._say(exc.render() if self.one_line_name is None else str(exc))
+        if isinstance(exc, UserError):
+            self._say_user_error(exc)
         else:
             self._say(f"error: {exc}")
         return EXIT_FAILED
@@ -90,17 +86,11 @@ class Boundary:
             else:
                 self._say(f"error: {exc.format_message()}")
             return exc.exit_code
-        except self.usage_errors as exc:
-            self._say(f"error: {exc}")
-            return EXIT_USAGE
-        except OscError as exc:
-            self._traceback()
-            self._say(exc.render() if self.one_line_name is None else str(exc))
-            return EXIT_FAILED
-        except self.runtime_errors as exc:
-            self._traceback()
-            self._say(f"error: {exc}")
-            return EXIT_FAILED
+        except UserError as exc:
+            if not exc.usage:
+                self._traceback()
+            self._say_user_error(exc)
+            return EXIT_USAGE if exc.usage else EXIT_FAILED
         except OSError as exc:
             self._traceback()
             self._say(f"error: {exc.strerror or exc}: {exc.filename}" if exc.filename else f"error: {exc}")
@@ -116,6 +106,9 @@ class Boundary:
             import traceback  # only here: importing it costs a millisecond of every start
 
             traceback.print_exc()
+
+    def _say_user_error(self, exc: UserError) -> None:
+        self._say(exc.render() if self.one_line_name is None else exc.located())
 
     def _say(self, message: str) -> None:
         message = printable_lines(message)       # names and source lines come from files: never raw escapes

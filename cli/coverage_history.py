@@ -59,21 +59,22 @@ def history_command(store_url: str | None, last: int | None, as_json: bool, debu
 def _side(given: str, store_url: str | None, named: bool):
     """A results folder, or (digits that name no folder) a batch id of the store."""
     from coverage_engine.coverage.diff import Side, folder_outcomes
-    from coverage_engine.coverage.errors import ResultsError, location
+    from coverage_engine.coverage.errors import ResultsError
     from coverage_engine.coverage.grading import build_report
     from coverage_engine.coverage.results_folder import read_results_folder
+    from coverage_engine.location import Location
     from coverage_engine.results.read import JunitUnreadable
 
     if os.path.isdir(given) and not named:
         try:
             outcomes = folder_outcomes(given)
         except JunitUnreadable as exc:
-            raise ResultsError(str(exc), location(given)) from None
+            raise ResultsError(str(exc), Location.whole_file(given)) from None
         return Side(given, outcomes, build_report(read_results_folder(given)))
     if not given.isdigit():
         if os.path.isdir(given):
             raise click.UsageError(f"{given}: with --store, A and B are batch ids")
-        raise ResultsError("no such results folder (and not a batch id)", location(given))
+        raise ResultsError("no such results folder (and not a batch id)", Location.whole_file(given))
     from executor.batch.history import store_side
     from store.queue import QueueStore
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import NoReturn
 
 import click
 
@@ -24,7 +25,6 @@ from cli.options import Seconds, debug_option, store_option
 from coverage_engine.results.files import RESULT_FILE
 from executor.batch.errors import BatchError, BatchUsageError
 from executor.output.terminal import printable
-from store.database import StoreError, StoreMissing
 
 PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
@@ -439,30 +439,27 @@ def _print_failures(store, batch) -> None:
         click.echo(text)
 
 
-def _unknown_subcommand(word: str) -> None:
+def _unknown_subcommand(word: str) -> NoReturn:
     """A bare word first is a subcommand or a mistake (the batch run itself takes only options): say which
     subcommands there are, and the nearest one, as click does for a misspelt option."""
     import difflib
 
     close = difflib.get_close_matches(word, list(SUBCOMMANDS), n=1, cutoff=0.6)
     hint = f" Did you mean '{close[0]}'?" if close else ""
-    click.echo(f"Usage: {PROG} [OPTIONS] -- [COMMAND]...\n       {PROG} worker|status|report [OPTIONS]\n"
-               f"Try '{PROG} -h' for help.\n\n{PROG}: error: no such subcommand '{word}' (subcommands: "
-               f"{', '.join(SUBCOMMANDS)}).{hint}", err=True)
-    raise SystemExit(2)
+    raise BatchUsageError(f"no such subcommand '{word}' (subcommands: {', '.join(SUBCOMMANDS)}).{hint}")
 
 
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point: dispatch to a subcommand or the batch run, map errors to exit codes."""
     args = list(sys.argv[1:] if argv is None else argv)
     command, prog = run_command, PROG
-    if args and not args[0].startswith("-") and args[0] not in SUBCOMMANDS:
-        _unknown_subcommand(args[0])
     if args and args[0] in SUBCOMMANDS:
         command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
         args = args[1:]
-    boundary = Boundary(prog, runtime_errors=(BatchError, StoreError), usage_errors=(BatchUsageError, StoreMissing),
-                        one_line_name=PROG)
+    boundary = Boundary(prog, one_line_name=PROG)
+    if args and not args[0].startswith("-") and command is run_command:
+        word = args[0]
+        sys.exit(boundary.guarded(lambda: _unknown_subcommand(word)))
     boundary.main(command, args)
 
 

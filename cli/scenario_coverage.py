@@ -29,7 +29,7 @@ from cli.boundary import Boundary
 from cli.coverage_history import diff_command, history_command, with_history
 from cli.options import debug_option, store_option
 from coverage_engine.printable import printable
-from store.database import StoreError, StoreMissing
+from store.database import StoreMissing
 
 if TYPE_CHECKING:
     from coverage_engine.coverage.model import CoverageReport
@@ -196,7 +196,7 @@ def group() -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point; errors become messages and exit codes in :mod:`cli.boundary`."""
-    Boundary(PROG, runtime_errors=(StoreError,), usage_errors=(StoreMissing,)).main(group, argv)
+    Boundary(PROG).main(group, argv)
 
 
 if __name__ == "__main__":  # pragma: no cover

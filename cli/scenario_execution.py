@@ -69,9 +69,7 @@ def command(scenario, debug, log_model, live_tree, output_dir, dry_run, dot, ste
 
 def main(args: list[str] | None = None) -> None:
     """Console-script entry point."""
-    from executor.runtime.pipeline import UsageProblem
-
-    Boundary("scenario_execution", runtime_errors=(UsageProblem,)).main(command, args)
+    Boundary("scenario_execution").main(command, args)
 
 
 #: The options of ``scenario_execution SCENARIO --output-dir DIR`` other than those two (parsed once).
@@ -88,9 +86,7 @@ def run_job(scenario: str, output_dir: str) -> NoReturn:
     their click types (the same checks and messages), and the command runs in a click context with
     click's handling of Ctrl-C, end of input and a closed pipe.
     """
-    from executor.runtime.pipeline import UsageProblem
-
-    boundary = Boundary("scenario_execution", runtime_errors=(UsageProblem,))
+    boundary = Boundary("scenario_execution")
     sys.exit(boundary.guarded(lambda: _invoke_job(boundary, scenario, output_dir)))
 
 

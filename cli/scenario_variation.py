@@ -1,6 +1,6 @@
 """``scenario_variation``: expand the ``keep(… in [...])`` constraints of an ``.osc`` into concrete ``.sce`` files.
 
-Thin click command: options in, a :class:`~executor.variation.generation.VariationRequest` to
+Thin click command: options in, a :class:`~executor.variation.request.VariationRequest` to
 :mod:`executor.variation` out; errors become one ``file:line:col: error: …`` message and an exit code
 in :mod:`cli.boundary`. Only click is imported at start-up; the front end, rich and SQLAlchemy are
 imported when needed, so ``-h`` and errors are quick.
@@ -18,7 +18,8 @@ import click
 from cli.boundary import Boundary
 from cli.options import debug_option, store_option
 from coverage_engine.suffixes import OSC_SUFFIX
-from executor.variation.generation import DEFAULT_MAX_VARIANTS, VariationRequest, VariationStoreError
+from executor.variation.request import DEFAULT_MAX_VARIANTS, VariationRequest
+from executor.variation.writing import VariationStoreError
 
 #: --strategy values (coverage_engine.variation.strategies.STRATEGIES; spelled here so -h imports nothing more).
 STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
@@ -100,7 +101,7 @@ def _scenario_files(given: tuple[str, ...]) -> list[str]:
 
 def main(args: list[str] | None = None) -> None:
     """Console script entry point."""
-    Boundary("scenario_variation", runtime_errors=(VariationStoreError,)).main(command, args)
+    Boundary("scenario_variation").main(command, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,9 +11,10 @@ Subpackages in the order data flows; each imports only the ones below it (checke
 ``parse/``
     ``grammar.lark`` compiled by lark into LALR tables (``tables``), our lexer (``lexer``), the
     indentation post-lexer (``indenter``), the table driver (``lalr``), the one syntax builder
-    (``transformer`` with ``transformer_expr``, ``strings`` for literals) making the frozen nodes of
-    ``syntax``; ``raw`` is one parse without messages, ``parser`` the entry point and ``syntax_errors``
-    the one place parse failures become messages; ``cache`` keeps the tables and parsed libraries between runs.
+    (``transformer`` with ``transformer_expr``, ``parts`` naming each rule's parts, ``strings`` for
+    literals) making the frozen nodes of ``syntax``; ``raw`` is one parse without messages, ``parser``
+    the entry point and ``syntax_errors`` the one place parse failures become messages; ``cache`` keeps
+    the tables and parsed libraries between runs.
 ``resolve/``
     ``resolver`` runs the passes: ``imports`` (imported files, libraries found by ``libraries``),
     ``namespace`` (declared ``types``), ``values`` (expressions, instances, external method calls, with the
@@ -36,7 +37,8 @@ Subpackages in the order data flows; each imports only the ones below it (checke
     each run's ``coverage.json`` and verdict merged into one graded coverage model, and its three renderers;
     it reads results and ``domains``, never the language pipeline (its map is in its ``__init__``).
 
-Below them: ``errors`` (the one exception tree; every error carries a ``location``), ``location``,
+Below them: ``errors`` (the one exception tree of every package, rooted at ``UserError``: an error carries
+its ``location`` when it has one), ``location`` (a place in a file, or the whole file),
 ``domains`` (what a variation declared per varied parameter: the ``# domain`` lines of a ``.sce``
 header and a batch's ``declared.json``, which the ``.sce`` writer writes and the coverage model reads),
 ``records`` (the ``@record`` decorator of syntax nodes and model records) and ``suffixes`` (``.osc``,

@@ -1,4 +1,5 @@
-"""The store: one SQLAlchemy database (SQLite by default, PostgreSQL for many hosts). Imports nothing else of ours.
+"""The store: one SQLAlchemy database (SQLite by default, PostgreSQL for many hosts). Imports nothing else of ours
+but the root of user errors (``coverage_engine.errors.UserError``), from which ``StoreError`` derives.
 
 ``database``
     a store URL becomes an engine; the schema version is guarded.

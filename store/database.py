@@ -28,6 +28,8 @@ from sqlalchemy import (
 from sqlalchemy.engine import make_url
 from sqlalchemy.exc import ArgumentError, SQLAlchemyError
 
+from coverage_engine.errors import UserError
+
 #: Shared metadata: table modules register their tables here.
 metadata = MetaData()
 
@@ -50,12 +52,15 @@ store_meta = Table(
 )
 
 
-class StoreError(Exception):
+class StoreError(UserError):
     """The store cannot be used (bad URL, unreachable server, incompatible schema)."""
 
 
 class StoreMissing(StoreError):
-    """There is no store at the given place (a command that only reads never creates one)."""
+    """There is no store at the given place (a command that only reads never creates one): the command
+    line names a store that is not there, so the command exits 2."""
+
+    usage = True
 
 
 #: SQLite's words for a write the disk or a file size limit refused.

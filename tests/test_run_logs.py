@@ -123,14 +123,21 @@ def test_a_killed_run_leaves_every_line_written_so_far(tmp_path):
     (tmp_path / "long.osc").write_text('import osc.helpers\nscenario long:\n    do serial:\n        log("a")\n'
                                        "        wait elapsed(120s)\n", encoding="utf-8")
     (tmp_path / "out").mkdir()
-    log = tmp_path / "out/behaviors.jsonl"
+    log, timing = tmp_path / "out/behaviors.jsonl", tmp_path / "out/tick_timing.csv"
+
+    def both_written() -> bool:
+        """The first action's success in the behaviour log, and a first tick's row in the timing file (it is
+        written at the end of the tick, after the log line: killing in between is no lost line)."""
+        text = log.read_text(encoding="utf-8") if log.exists() else ""
+        return ('"behavior_name":"log","class_name"' in text and '"status":"SUCCESS"' in text
+                and timing.exists() and timing.read_text(encoding="utf-8").count("\n") >= 2)
+
     child = subprocess.Popen([EXE, "long.osc", "-o", "out", "--bt-log", "--tick-log"], cwd=tmp_path,
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         deadline = time.monotonic() + 60
-        while not (log.exists() and '"behavior_name":"log","class_name"' in log.read_text(encoding="utf-8")
-                   and '"status":"SUCCESS"' in log.read_text(encoding="utf-8")):
-            assert time.monotonic() < deadline, "the log never showed the first action's success"
+        while not both_written():
+            assert time.monotonic() < deadline, "the logs never showed the first action's success and tick"
             time.sleep(0.05)
         os.killpg(child.pid, signal.SIGKILL)
     finally:

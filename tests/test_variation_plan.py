@@ -10,7 +10,7 @@ import pytest
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
-from coverage_engine.variation.plan import plan_variation
+from coverage_engine.variation.choice import plan_variation
 
 TWO_KEEPS = """import osc.helpers
 
@@ -102,7 +102,7 @@ def test_multiline_list_keeps_line_numbers(tmp_path):
 
 def test_no_keep_gives_one_model(tmp_path):
     plan, resolver = _plan(tmp_path, "import osc.helpers\nscenario quick:\n    do log('x')\n")
-    assert plan.dimensions == [] and plan.total == 1
+    assert plan.dimensions == () and plan.total == 1
     assert list(plan.combinations()) == [(0, (), None)]
     assert plan.scenario == "quick" and len(resolver.calls) == 1
 
@@ -139,3 +139,42 @@ scenario test:
     plan, _ = _plan(tmp_path, text)
     assert plan.keys == ["test.param1.base1", "test.speed", "test.foo.p"]
     assert plan.stored() == [["foo1", "foo2"], [1.5, -2.0], ["base_struct(base1: 'x')", "base_struct(base1: 'y')"]]
+
+
+RANGE_AND_LIST = """import osc.helpers
+
+scenario test:
+    speed: speed with:
+        keep(it in [10kph..50kph])
+    lanes: int with:
+        keep(it in [1, 2, 3])
+    do log('x')
+"""
+
+
+def test_design_points_map_unit_coordinates_onto_each_axis(tmp_path):
+    from coverage_engine.proposals import Proposal, header_proposal
+    from coverage_engine.variation.checking import check_values
+    from coverage_engine.variation.choice import choose_all
+    from coverage_engine.variation.design import design_points
+    from coverage_engine.variation.output import generate
+    from coverage_engine.variation.plan import parse_variation
+
+    path = tmp_path / "main.osc"
+    path.write_text(RANGE_AND_LIST)
+    parsed = parse_variation(path)
+    assert parsed.keys == ["test.speed", "test.lanes"]
+    planned = design_points(parsed, [[0.0, 0.25, 1.0], [0.0, 0.5, 1.0]], note="strategy boundary, round 2",
+                            samples=3, proposal=Proposal(2, "boundary", ("r1",)))
+    assert [planned.assignment(row) for row in planned.rows] == [
+        {"test.speed": 10.0, "test.lanes": 1}, {"test.speed": 20.0, "test.lanes": 2},
+        {"test.speed": 50.0, "test.lanes": 3}]
+    assert parsed.dimensions[0].choices == ()          # the parsed stage is untouched by the design
+    checked = check_values(planned, Scripted())
+    plan = choose_all(checked)
+    assert plan.total == plan.valid_count() == 3 and planned.rows == plan.rows
+    result = generate(plan, tmp_path / "out")
+    assert result.written == 3
+    text = (tmp_path / "out" / "main1.sce").read_text()
+    assert header_proposal(text) == Proposal(2, "boundary", ("r1",))
+    assert "# strategy boundary, round 2\n" in text

@@ -8,12 +8,6 @@ file's text), a key of the plan file, or just the file or folder. ``cli/`` rende
 from __future__ import annotations
 
 from coverage_engine.errors import OscError
-from coverage_engine.location import Location
-
-
-def location(file: str, line: int = 0, column: int = 0) -> Location:
-    """A location in ``file``; line 0 means the file as a whole."""
-    return Location(file=str(file), line=line, column=column)
 
 
 class CoverageError(OscError):

@@ -26,7 +26,8 @@ from fnmatch import fnmatchcase
 
 import yaml
 
-from coverage_engine.coverage.errors import PlanError, location
+from coverage_engine.coverage.errors import PlanError
+from coverage_engine.location import Location
 
 #: Largest plan file read.
 MAX_PLAN_BYTES = 1024 * 1024
@@ -77,7 +78,7 @@ def _error(file: str, node: yaml.Node, message: str, text: str) -> PlanError:
     mark = node.start_mark
     lines = text.splitlines()
     source = lines[mark.line] if mark.line < len(lines) else None
-    return PlanError(message, location(file, mark.line + 1, mark.column + 1), source_line=source)
+    return PlanError(message, Location.at(file, mark.line + 1, mark.column + 1), source_line=source)
 
 
 def _mapping(file: str, node: yaml.Node, what: str, allowed: tuple[str, ...], text: str) -> dict:
@@ -130,13 +131,13 @@ def parse_plan(text: str, file: str = "plan.yaml") -> CoveragePlan:
     try:
         root = compose_bounded(text)
     except YamlLimitError as exc:
-        raise PlanError(str(exc), location(file, exc.line, exc.column) if exc.line else location(file)) from None
+        raise PlanError(str(exc), Location.at(file, exc.line, exc.column)) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
-        where = location(file, mark.line + 1, mark.column + 1) if mark else location(file)
+        where = Location.at(file, mark.line + 1, mark.column + 1) if mark else Location.whole_file(file)
         raise PlanError(f"not valid YAML: {exc.problem or exc}", where) from None
     except yaml.YAMLError as exc:
-        raise PlanError(f"not valid YAML: {exc}", location(file)) from None
+        raise PlanError(f"not valid YAML: {exc}", Location.whole_file(file)) from None
     if root is None:
         return CoveragePlan(file=file)
     top = _mapping(file, root, "the plan", _TOP_KEYS, text)
@@ -167,11 +168,11 @@ def read_plan(path: str | os.PathLike[str]) -> CoveragePlan:
         with open(name, "rb") as handle:
             data = handle.read(MAX_PLAN_BYTES + 1)
     except OSError as exc:
-        raise PlanError(f"cannot read the plan: {exc.strerror or exc}", location(name)) from None
+        raise PlanError(f"cannot read the plan: {exc.strerror or exc}", Location.whole_file(name)) from None
     if len(data) > MAX_PLAN_BYTES:
-        raise PlanError(f"the plan is larger than {MAX_PLAN_BYTES} bytes", location(name))
+        raise PlanError(f"the plan is larger than {MAX_PLAN_BYTES} bytes", Location.whole_file(name))
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
-        raise PlanError("the plan is not UTF-8 text", location(name)) from None
+        raise PlanError("the plan is not UTF-8 text", Location.whole_file(name)) from None
     return parse_plan(text, name)

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import yaml
 
-from coverage_engine.coverage.errors import ResultsError, RunFileError, location
+from coverage_engine.coverage.errors import ResultsError, RunFileError
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
@@ -32,6 +32,7 @@ from coverage_engine.domains import (
     header_domains,
     read_declared,
 )
+from coverage_engine.location import Location
 from coverage_engine.printable import clean_text, surrogates_escaped
 from coverage_engine.results.files import COVERAGE_FILE, DECLARED_FILE, LOG_FILE, RESULT_FILE
 from coverage_engine.results.read import JunitUnreadable
@@ -236,7 +237,7 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
             coverage = reader.coverage(folder) if folder is not None else None
             yield reader.run(name, folder, verdict, reason, assignment, coverage)
     except JunitUnreadable as exc:
-        raise ResultsError(f"the merged report cannot be read: {exc}", location(str(report))) from None
+        raise ResultsError(f"the merged report cannot be read: {exc}", Location.whole_file(str(report))) from None
     extra = [name for name in folders if name not in listed]
     if extra or newer:
         source.complete = False
@@ -294,9 +295,10 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
     """The runs of a batch's results folder or of one run's output folder."""
     given = Path(path)
     if not given.exists():
-        raise ResultsError("no such folder", location(str(given)))
+        raise ResultsError("no such folder", Location.whole_file(str(given)))
     if not given.is_dir():
-        raise ResultsError("not a folder (give a results folder or a run's output folder)", location(str(given)))
+        raise ResultsError("not a folder (give a results folder or a run's output folder)",
+                           Location.whole_file(str(given)))
     root = given.resolve()
     reader = _Reader(root)
     source = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(root))
@@ -318,7 +320,7 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
         runs = _unmerged(list(folders), folders, reader)
     else:
         raise ResultsError("no results here: expected test.xml or coverage.json, or job folders holding them",
-                           location(str(given)))
+                           Location.whole_file(str(given)))
 
     def stream() -> Iterator[RunInput]:
         yield from runs

@@ -29,7 +29,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from coverage_engine.coverage.errors import RunFileError, location
+from coverage_engine.coverage.errors import RunFileError
 from coverage_engine.coverage.json_positions import line_column, locate
 from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: the file's public records
     FORMAT,
@@ -43,6 +43,7 @@ from coverage_engine.coverage.run_records import (  # noqa: F401 - re-exported: 
 )
 from coverage_engine.coverage.run_schema import Invalid, path_text, validate
 from coverage_engine.coverage.values import ValueType
+from coverage_engine.location import Location
 from coverage_engine.results.atomic import write_text_atomically
 from coverage_engine.results.files import COVERAGE_FILE
 
@@ -54,7 +55,7 @@ def parse_declarations(items: Sequence[Mapping[str, Any]], origin: str = COVERAG
     try:
         return validate(doc).items
     except Invalid as exc:
-        raise RunFileError(f"{path_text(exc.path)}: {exc.message}", location(origin)) from None
+        raise RunFileError(f"{path_text(exc.path)}: {exc.message}", Location.whole_file(origin)) from None
 
 
 # ------------------------------------------------------------------------------------------ reading
@@ -63,9 +64,9 @@ def parse_run_coverage(text: str, filename: str = COVERAGE_FILE) -> RunCoverage:
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise RunFileError(f"not valid JSON: {exc.msg}", location(filename, exc.lineno, exc.colno)) from None
+        raise RunFileError(f"not valid JSON: {exc.msg}", Location.at(filename, exc.lineno, exc.colno)) from None
     except RecursionError:
-        raise RunFileError("nested too deeply", location(filename)) from None
+        raise RunFileError("nested too deeply", Location.whole_file(filename)) from None
     try:
         return validate(doc)
     except Invalid as exc:
@@ -74,7 +75,7 @@ def parse_run_coverage(text: str, filename: str = COVERAGE_FILE) -> RunCoverage:
         if source_line is not None and len(source_line) > 200:
             source_line = None
         prefix = f"{path_text(exc.path)}: " if exc.path else ""
-        raise RunFileError(prefix + exc.message, location(filename, *where), source_line=source_line) from None
+        raise RunFileError(prefix + exc.message, Location.at(filename, *where), source_line=source_line) from None
 
 
 def read_run_coverage(path: str | os.PathLike[str], max_bytes: int = MAX_FILE_BYTES) -> RunCoverage:
@@ -84,14 +85,14 @@ def read_run_coverage(path: str | os.PathLike[str], max_bytes: int = MAX_FILE_BY
         with open(name, "rb") as handle:
             data = handle.read(max_bytes + 1)
     except OSError as exc:
-        raise RunFileError(f"cannot read: {exc.strerror or exc}", location(name)) from None
+        raise RunFileError(f"cannot read: {exc.strerror or exc}", Location.whole_file(name)) from None
     if len(data) > max_bytes:
-        raise RunFileError(f"larger than {max_bytes} bytes", location(name))
+        raise RunFileError(f"larger than {max_bytes} bytes", Location.whole_file(name))
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line, column = line_column(data[:exc.start].decode("utf-8", "replace"), exc.start)
-        raise RunFileError("not UTF-8 text", location(name, line, column)) from None
+        raise RunFileError("not UTF-8 text", Location.at(name, line, column)) from None
     return parse_run_coverage(text, name)
 
 

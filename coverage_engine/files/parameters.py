@@ -23,7 +23,7 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
     import yaml
 
     path = Path(path)
-    whole_file = Location(str(path), 0, 0)
+    whole_file = Location.whole_file(str(path))
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -37,7 +37,7 @@ def read_parameter_documents(path: str | Path) -> list[dict]:
     except YamlLimitError as exc:           # too big, an alias bomb, or a key written twice (DuplicateKeyError)
         lines = text.splitlines()
         line = lines[exc.line - 1] if 0 < exc.line <= len(lines) else None
-        raise ParameterFileError(str(exc), Location(str(path), exc.line, exc.column) if exc.line else whole_file,
+        raise ParameterFileError(str(exc), Location.at(str(path), exc.line, exc.column),
                                  source_line=line) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
@@ -81,13 +81,13 @@ def write_parameter_template(scenario_path: str | Path, template_path: str | Pat
     target = Path(template_path)
     if target.exists():
         raise ParameterFileError("file exists; not overwriting it (remove it or choose another name)",
-                                 Location(str(target), 0, 0))
+                                 Location.whole_file(str(target)))
     model = load_scenario_file(scenario_path)
     text = yaml.safe_dump(template_values(model), sort_keys=False, default_flow_style=False, allow_unicode=True)
     try:
         with open(target, "x", encoding="utf-8") as handle:
             handle.write(text)
     except FileExistsError:
-        raise ParameterFileError("file exists; not overwriting it", Location(str(target), 0, 0)) from None
+        raise ParameterFileError("file exists; not overwriting it", Location.whole_file(str(target))) from None
     except OSError as exc:
-        raise ParameterFileError(f"cannot write template: {exc.strerror}", Location(str(target), 0, 0)) from exc
+        raise ParameterFileError(f"cannot write template: {exc.strerror}", Location.whole_file(str(target))) from exc

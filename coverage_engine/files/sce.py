@@ -120,7 +120,7 @@ class VariantLines:
     def place(self, location: Location) -> str:
         """``gap.osc:11:9 (out/gap3.sce:24:9)`` for a location in the model, else the location alone."""
         line = location.line - self.offset
-        if location.file != self.sce_file or location.line < 1 or line < 1:
+        if location.file != self.sce_file or location.is_whole_file or line < 1:
             return str(location)
         return f"{self.source_file}:{line}:{location.column} ({location})"
 
@@ -156,8 +156,7 @@ def _load_yaml(text: str, path: str):
     except DuplicateKeyError as exc:
         raise SceFormatError(f"malformed .sce file: {exc}", Location(path, exc.line, exc.column)) from None
     except YamlLimitError as exc:
-        where = Location(path, exc.line, exc.column) if exc.line else Location(path, 0, 0)
-        raise SceFormatError(f"not a usable .sce file: {exc}", where) from None
+        raise SceFormatError(f"not a usable .sce file: {exc}", Location.at(path, exc.line, exc.column)) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         location = Location(path, mark.line + 1, mark.column + 1) if mark is not None else None
@@ -172,7 +171,7 @@ def _load_yaml(text: str, path: str):
             shown = f"{code:#x}" if isinstance(code, int) else "?"
             raise SceFormatError(f"not a valid .sce file: character {shown} is not allowed in YAML",
                                  Location(path, line, column)) from None
-        raise SceFormatError(f"not a valid .sce file: {exc}", Location(path, 0, 0)) from exc
+        raise SceFormatError(f"not a valid .sce file: {exc}", Location.whole_file(path)) from exc
 
 
 def _model_first_line(text: str) -> int:

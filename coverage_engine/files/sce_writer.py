@@ -22,6 +22,7 @@ from coverage_engine.domains import InputDomain, domain_line, drawn_text
 from coverage_engine.files.sce import SCE_END, SCE_FORMAT_VERSION, SCE_MAGIC
 from coverage_engine.files.sce_plain import YAML_SPECIAL
 from coverage_engine.lazy import Mapped, NumberTexts, per_choice, row_texts
+from coverage_engine.proposals import Proposal, proposal_line
 
 #: A model holding a character YAML reads specially cannot be a literal block: it is quoted instead.
 _BLOCK_UNSAFE = YAML_SPECIAL
@@ -118,7 +119,7 @@ class SceTemplate:
                  chunks: list[str], replacements: Sequence[Sequence[str]], keys: list[str],
                  shown: Sequence[Sequence[str]], stored: Sequence[Sequence[object]],
                  documents: Sequence[Mapping[str, object]] | None = None, note: str | None = None,
-                 domains: Sequence[InputDomain] = ()) -> None:
+                 domains: Sequence[InputDomain] = (), proposal: Proposal | None = None) -> None:
         model = "".join(chunks)
         # Listed values are checked one by one; a lazy slot holds drawn numbers (plain one-line text).
         self._block = _BLOCK_UNSAFE.search(model) is None and all(
@@ -132,7 +133,7 @@ class SceTemplate:
         self._replacements = replacements
         self._magic = f"{SCE_MAGIC}, format {SCE_FORMAT_VERSION}: variant "
         self._of = f" of {_one_line(Path(source).name)}\n" + (f"# {_one_line(note)}\n" if note else "")
-        self._domains = "".join(domain_line(d) for d in domains)
+        self._domains = "".join(domain_line(d) for d in domains) + (proposal_line(proposal) if proposal else "")
         self._head = (
             f"format_version: {SCE_FORMAT_VERSION}\n"
             f"source: {_quote(source)}\n"

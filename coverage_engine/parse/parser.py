@@ -71,7 +71,7 @@ _parsed_cache: dict[tuple[str, float], CompilationUnit] = {}
 #: invalidates the disk cache.
 _PARSER_FILES = ("parse/grammar.lark", "parse/lexer.py", "parse/indenter.py", "parse/lalr.py", "parse/tables.py",
                  "parse/parser.py", "parse/syntax.py", "parse/transformer.py", "parse/transformer_expr.py",
-                 "parse/strings.py", "location.py", "records.py")
+                 "parse/strings.py", "parse/parts.py", "location.py", "records.py")
 
 
 def _disk_cache_path(path: Path, stat: os.stat_result) -> Path | None:

@@ -3,7 +3,8 @@
 It runs inside the LALR parser (no intermediate parse tree) with every token kept, so each rule
 sees its first and last token and computes its own :class:`~coverage_engine.parse.Location` --
 exact to the character, which the variation generator needs to cut and replace source. No
-semantics here: nothing is looked up, converted or evaluated. Constructs the grammar accepts only
+semantics here: nothing is looked up, converted or evaluated. A rule reads its parts by name, never by
+position (:mod:`~coverage_engine.parse.parts`). Constructs the grammar accepts only
 so they can be refused by name (``cover``, ``on @event``, ``sample`` …) raise
 :class:`UnsupportedFeatureError` at their position.
 """
@@ -13,7 +14,25 @@ from __future__ import annotations
 from coverage_engine.errors import OscSyntaxError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
-from coverage_engine.parse.lexer import Token
+from coverage_engine.parse.parts import (
+    Default,
+    ExternalImpl,
+    Inherits,
+    Marker,
+    MethodParams,
+    SiArgument,
+    SiArguments,
+    SignedNumber,
+    WithBlock,
+    arguments_of,
+    built,
+    maybe_node,
+    maybe_token,
+    node,
+    nodes,
+    token,
+    tokens,
+)
 from coverage_engine.parse.transformer_expr import BehaviorExpressionRules
 
 #: Member statements that declare coverage items rather than apply a modifier.
@@ -26,46 +45,46 @@ class SyntaxBuilder(BehaviorExpressionRules):
     # ------------------------------------------------------------------ file level
 
     def start(self, children):
-        imports = tuple(c for c in children if isinstance(c, s.Import))
-        decls = tuple(c for c in children if not isinstance(c, (s.Import, Token)))
+        imports = nodes(children, s.Import)
+        decls = tuple(c for c in built(children) if not isinstance(c, s.Import))
         return s.CompilationUnit(self.file, imports, decls, self.text)
 
     def import_stmt(self, children):
-        ref = children[1]
-        if isinstance(ref, Token):
+        path = maybe_token(children, "STRING")
+        if path is not None:
             from coverage_engine.parse.strings import unescape_string
 
-            return s.Import(unescape_string(str(ref)), True, self.loc(children))
-        return s.Import(ref.dotted, False, self.loc(children))
+            return s.Import(unescape_string(str(path)), True, self.loc(children))
+        return s.Import(node(children, s.QualifiedName).dotted, False, self.loc(children))
 
     def qualified_name(self, children):
         if len(children) == 1:
-            return s.QualifiedName((self.name(children[0]),), self.tloc(children[0]))
-        return s.QualifiedName(tuple(self.name(t) for t in children if t.type == "NAME"), self.loc(children))
+            (only,) = children
+            return s.QualifiedName((self.name(only),), self.tloc(only))
+        return s.QualifiedName(tuple(self.name(t) for t in tokens(children, "NAME")), self.loc(children))
 
     def namespace_decl(self, children):
-        raise self.unsupported("namespaces", children[0])
+        raise self.unsupported("namespaces", token(children, "NAMESPACE"))
 
     def physical_type_decl(self, children):
-        name, args = children[1], children[5]
         exps = []
-        for arg_name, value, loc in args:
-            if arg_name in ("factor", "offset"):
-                raise OscSyntaxError(f"'{arg_name}' belongs in a unit declaration, not a type", loc,
-                                     self.source_line(loc.line))
-            exps.append((arg_name, self.exponent(value, loc)))
-        return s.PhysicalTypeDecl(self.name(name), tuple(exps), self.loc(children))
+        for arg in node(children, SiArguments).items:
+            if arg.name in ("factor", "offset"):
+                raise OscSyntaxError(f"'{arg.name}' belongs in a unit declaration, not a type", arg.location,
+                                     self.source_line(arg.location.line))
+            exps.append((arg.name, self.exponent(arg.value, arg.location)))
+        return s.PhysicalTypeDecl(self.name(token(children, "NAME")), tuple(exps), self.loc(children))
 
     def unit_decl(self, children):
-        name, type_name, args = children[1], children[3], children[7]
+        name, type_name = tokens(children, "NAME")
         exps, factor, offset = [], None, None
-        for arg_name, value, loc in args:
-            if arg_name == "factor":
-                factor = float(value)
-            elif arg_name == "offset":
-                offset = float(value)
+        for arg in node(children, SiArguments).items:
+            if arg.name == "factor":
+                factor = float(arg.value)
+            elif arg.name == "offset":
+                offset = float(arg.value)
             else:
-                exps.append((arg_name, self.exponent(value, loc)))
+                exps.append((arg.name, self.exponent(arg.value, arg.location)))
         return s.UnitDecl(self.name(name), self.name(type_name), tuple(exps), factor, offset,
                           self.loc(children))
 
@@ -75,13 +94,13 @@ class SyntaxBuilder(BehaviorExpressionRules):
         return value
 
     def si_args(self, children):
-        return [c for c in children if not isinstance(c, Token)]
+        return SiArguments(nodes(children, SiArgument))
 
     def si_arg(self, children):
-        return (self.name(children[0]), children[2][0], self.loc(children))
+        return SiArgument(self.name(token(children, "NAME")), node(children, SignedNumber).value, self.loc(children))
 
     def signed_number(self, children):
-        tok = children[-1]
+        tok = token(children, "INT", "FLOAT", "HEX")
         text = str(tok)
         if tok.type == "HEX":
             value: int | float = int(text, 16)
@@ -89,69 +108,67 @@ class SyntaxBuilder(BehaviorExpressionRules):
             value = int(text)
         else:
             value = float(text)
-        return (-value if len(children) > 1 else value), self.loc(children)
+        negative = maybe_token(children, "MINUS") is not None
+        return SignedNumber(-value if negative else value, self.loc(children))
 
     def enum_decl(self, children):
-        members = tuple(c for c in children if isinstance(c, s.EnumMember))
-        return s.EnumDecl(self.name(children[1]), members, self.loc(children))
+        members = nodes(children, s.EnumMember)
+        return s.EnumDecl(self.name(token(children, "NAME")), members, self.loc(children))
 
     def enum_member(self, children):
+        value = maybe_token(children, "INT", "HEX")
         number = None
-        if len(children) == 3:
-            value = children[2]
+        if value is not None:
             number = int(str(value), 16) if value.type == "HEX" else int(str(value))
-        return s.EnumMember(self.name(children[0]), number, self.loc(children))
+        return s.EnumMember(self.name(token(children, "NAME")), number, self.loc(children))
 
     def enum_extend_decl(self, children):
-        raise self.unsupported("extending an enum", children[0])
+        raise self.unsupported("extending an enum", token(children, "EXTEND"))
 
     # ------------------------------------------------------------------ type declarations
 
     def type_decl(self, children):
-        kind, name = children[0], children[1]
-        parent = children[2] if isinstance(children[2], s.QualifiedName) else None
-        members = tuple(c for c in children[2:] if not isinstance(c, (Token, s.QualifiedName)))
-        return s.TypeDecl(str(kind), name, parent, members, self.loc(children))
+        kind = token(children, "STRUCT", "ACTOR", "ACTION", "SCENARIO")
+        inherits = maybe_node(children, Inherits)
+        members = tuple(c for c in built(children) if not isinstance(c, (s.QualifiedName, Inherits)))
+        return s.TypeDecl(str(kind), node(children, s.QualifiedName), inherits.parent if inherits else None,
+                          members, self.loc(children))
 
     def inherits(self, children):
-        if len(children) > 2:
-            raise self.unsupported("conditional inheritance", children[2])
-        return children[1]
+        condition = maybe_node(children, Marker)
+        if condition is not None:
+            raise self.unsupported("conditional inheritance", condition.location)
+        return Inherits(node(children, s.QualifiedName))
 
     def inherits_condition(self, children):
-        return self.loc(children)
+        return Marker(self.loc(children))
 
     def modifier_decl(self, children):
-        name = children[1]
+        name = node(children, s.QualifiedName)
         if len(name.parts) > 1:
             raise self.unsupported("actor modifiers (modifier actor.name)", name.location)
-        if isinstance(children[2], Location):
-            raise self.unsupported("modifier ... of ...", children[2])
-        members = tuple(c for c in children[2:] if not isinstance(c, Token))
+        of = maybe_node(children, Marker)
+        if of is not None:
+            raise self.unsupported("modifier ... of ...", of.location)
+        members = tuple(c for c in built(children) if c is not name)
         return s.TypeDecl("modifier", name, None, members, self.loc(children))
 
     def modifier_of(self, children):
-        return self.loc(children)
+        return Marker(self.loc(children))
 
     def extend_decl(self, children):
-        members = tuple(c for c in children[2:] if not isinstance(c, Token))
-        return s.Extension(children[1], members, self.loc(children))
+        target = node(children, s.QualifiedName)
+        members = tuple(c for c in built(children) if c is not target)
+        return s.Extension(target, members, self.loc(children))
 
     # ------------------------------------------------------------------ members
 
     def _param_parts(self, children):
-        names, type_ref, default, with_members = [], None, None, ()
-        for c in children:
-            if isinstance(c, Token):
-                if c.type == "NAME":
-                    names.append(self.name(c))
-            elif isinstance(c, s.TypeRef):
-                type_ref = c
-            elif isinstance(c, tuple):
-                with_members = c
-            else:
-                default = c
-        return tuple(names), type_ref, default, with_members
+        names = tuple(self.name(t) for t in tokens(children, "NAME"))
+        default = maybe_node(children, Default)
+        with_block = maybe_node(children, WithBlock)
+        return (names, node(children, s.TypeRef), default.value if default else None,
+                with_block.members if with_block else ())
 
     def param_decl(self, children):
         names, type_ref, default, with_members = self._param_parts(children)
@@ -166,85 +183,81 @@ class SyntaxBuilder(BehaviorExpressionRules):
         return s.VariableDecl(names, type_ref, default, self.loc(children))
 
     def default(self, children):
-        return children[1]
+        (value,) = built(children)
+        return Default(value, self.loc(children))
 
     def type_ref(self, children):
-        return s.TypeRef(children[-1], len(children) == 3, self.loc(children))
+        is_list = maybe_token(children, "LIST") is not None
+        return s.TypeRef(node(children, s.QualifiedName), is_list, self.loc(children))
 
     def event_decl(self, children):
-        params: tuple = ()
-        for c in children[2:]:
-            if isinstance(c, tuple):
-                params = c
-            elif isinstance(c, Location):
-                raise self.unsupported("event ... is <condition>", c)
-        return s.EventDecl(self.name(children[1]), params, self.loc(children))
+        condition = maybe_node(children, Marker)
+        if condition is not None:
+            raise self.unsupported("event ... is <condition>", condition.location)
+        params = maybe_node(children, MethodParams)
+        return s.EventDecl(self.name(token(children, "NAME")), params.params if params else (),
+                           self.loc(children))
 
     def event_is(self, children):
-        return self.loc(children)
+        return Marker(self.loc(children))
 
     def method_decl(self, children):
-        params: tuple = ()
-        return_type = None
-        impl = None
-        for c in children[2:]:
-            if isinstance(c, tuple) and c and isinstance(c[0], s.MethodParameter):
-                params = c
-            elif isinstance(c, s.TypeRef):
-                return_type = c
-            elif isinstance(c, list):
-                impl = c
-        external, arguments = impl
-        return s.MethodDecl(self.name(children[1]), params, return_type, external, arguments,
-                            self.loc(children))
+        params = maybe_node(children, MethodParams)
+        impl = node(children, ExternalImpl)
+        return s.MethodDecl(self.name(token(children, "NAME")), params.params if params else (),
+                            maybe_node(children, s.TypeRef), impl.function, impl.arguments, self.loc(children))
 
     def method_params(self, children):
-        return tuple(c for c in children if isinstance(c, s.MethodParameter))
+        return MethodParams(nodes(children, s.MethodParameter))
 
     def method_param(self, children):
-        default = children[3] if len(children) > 3 else None
-        return s.MethodParameter(self.name(children[0]), children[2], default, self.loc(children))
+        default = maybe_node(children, Default)
+        return s.MethodParameter(self.name(token(children, "NAME")), node(children, s.TypeRef),
+                                 default.value if default else None, self.loc(children))
 
     def external_impl(self, children):
-        if children[0].type == "ONLY":
-            raise self.unsupported("'only' methods", children[0])
-        name = children[1]
-        arguments = next((c for c in children if isinstance(c, tuple)), ())
-        return [name, arguments]
+        only = maybe_token(children, "ONLY")
+        if only is not None:
+            raise self.unsupported("'only' methods", only)
+        return ExternalImpl(node(children, s.QualifiedName), arguments_of(children))
 
     def expression_impl(self, children):
-        raise self.unsupported("methods implemented by 'is expression'", children[0])
+        raise self.unsupported("methods implemented by 'is expression'", token(children, "ONLY", "EXPRESSION"))
 
     def undefined_impl(self, children):
-        raise self.unsupported("methods declared 'is undefined'", children[0])
+        raise self.unsupported("methods declared 'is undefined'", token(children, "ONLY", "UNDEFINED"))
 
     def with_block(self, children):
-        return tuple(c for c in children if not isinstance(c, Token))
+        members = built(children)
+        return WithBlock(members, self.loc(members))
 
     def keep_stmt(self, children):
-        return children[0]
+        return node(children, s.KeepConstraint)
 
     def keep(self, children):
-        qualifier = children[2] if isinstance(children[2], Token) else None
-        return s.KeepConstraint(children[-2], qualifier is not None and qualifier.type == "DEFAULT",
-                                self.loc(children))
+        (constraint,) = built(children)
+        is_default = maybe_token(children, "DEFAULT") is not None
+        return s.KeepConstraint(constraint, is_default, self.loc(children))
 
     def modifier_stmt(self, children):
-        return children[0]
+        (call,) = built(children)
+        return call
 
     def modifier_call(self, children):
-        name = children[0]
-        arguments = children[2] if isinstance(children[2], tuple) else ()
+        name = node(children, s.QualifiedName)
+        arguments = arguments_of(children)
         if len(name.parts) == 1 and name.parts[0] in COVERAGE_MEMBERS:
             return s.CoverageDecl(name.parts[0], arguments, self.loc(children))
         self.check_call_name(name)
         return s.ModifierInvocation(name, arguments, self.loc(children))
 
     def until_stmt(self, children):
-        return s.Until(children[1], self.loc(children))
+        (condition,) = built(children)
+        return s.Until(condition, self.loc(children))
 
     def on_directive(self, children):
-        raise self.unsupported("on @event", children[0])
+        raise self.unsupported("on @event", token(children, "ON"))
 
     def do_directive(self, children):
-        return s.DoDirective(children[1], self.loc(children))
+        (member,) = built(children)
+        return s.DoDirective(member, self.loc(children))

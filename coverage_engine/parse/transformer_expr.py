@@ -15,6 +15,16 @@ from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
 from coverage_engine.parse.lexer import Token
+from coverage_engine.parse.parts import (
+    ArgumentList,
+    Refusal,
+    WithBlock,
+    arguments_of,
+    built,
+    maybe_node,
+    nodes,
+    token,
+)
 from coverage_engine.parse.strings import unescape_string
 from coverage_engine.records import replace
 
@@ -112,56 +122,53 @@ class BehaviorExpressionRules:
     # ------------------------------------------------------------------ behaviours
 
     def labelled(self, children):
-        return replace(children[-1], label=self.name(children[0]), location=self.loc(children))
+        (behavior,) = built(children)
+        return replace(behavior, label=self.name(token(children, "NAME")), location=self.loc(children))
 
     def composite(self, children):
-        arguments: tuple = ()
-        members, with_members = [], ()
-        for c in children[1:]:
-            if isinstance(c, Token):
-                continue
-            if isinstance(c, list):
-                arguments = tuple(c)
-            elif isinstance(c, tuple):
-                with_members = c
-            else:
-                members.append(c)
-        return s.Composite(str(children[0]), None, tuple(members), arguments, with_members, self.loc(children))
+        kind = token(children, "SERIAL", "PARALLEL", "ONE_OF")
+        with_block = maybe_node(children, WithBlock)
+        members = tuple(c for c in built(children) if not isinstance(c, (ArgumentList, WithBlock)))
+        return s.Composite(str(kind), None, members, arguments_of(children),
+                           with_block.members if with_block else (), self.loc(children))
 
     def composite_args(self, children):
-        return list(children[1]) if isinstance(children[1], tuple) else []
+        return ArgumentList(arguments_of(children))
 
     def invocation(self, children):
-        name = children[0]
+        name, _open, *inside, _close, end = children
         self.check_call_name(name)
-        arguments = children[2] if isinstance(children[2], tuple) else ()
-        last = children[-1]
-        with_members = last if isinstance(last, tuple) and last is not arguments else ()
-        return s.Invocation(None, name, arguments, with_members, self.loc(children))
+        with_members = end.members if type(end) is WithBlock else ()
+        return s.Invocation(None, name, arguments_of(inside), with_members, self.loc(children))
 
     def wait(self, children):
-        return s.Wait(None, children[1], self.loc(children))
+        (condition,) = built(children)
+        return s.Wait(None, condition, self.loc(children))
 
     def wait_condition(self, children):
-        for c in children[1:]:
-            raise self.unsupported(c[0], c[1])
-        return children[0]
+        if len(children) == 1:
+            (condition,) = children
+            return condition
+        refused = maybe_node(children, Refusal)
+        if refused is not None:
+            raise self.unsupported(refused.what, refused.location)
+        (condition,) = children
+        return condition
 
     def event_as(self, children):
-        return ("event field declarations (as ...)", self.loc(children))
+        return Refusal("event field declarations (as ...)", self.loc(children))
 
     def event_if(self, children):
-        return ("event conditions (if ...)", self.loc(children))
+        return Refusal("event conditions (if ...)", self.loc(children))
 
     def emit(self, children):
-        arguments = next((c for c in children if isinstance(c, tuple)), ())
-        return s.Emit(None, self.name(children[1]), arguments, self.loc(children))
+        return s.Emit(None, self.name(token(children, "NAME")), arguments_of(children), self.loc(children))
 
     def emit_args(self, children):
-        return children[1] if isinstance(children[1], tuple) else ()
+        return ArgumentList(arguments_of(children))
 
     def call(self, children):
-        expr = children[1]
+        (expr,) = built(children)
         if not isinstance(expr, s.Call):
             loc = expr.location
             raise OscSyntaxError("'call' needs a method call, e.g. call lib.method()", loc,
@@ -171,7 +178,7 @@ class BehaviorExpressionRules:
     # ------------------------------------------------------------------ arguments
 
     def arguments(self, children):
-        args = tuple(c for c in children if not isinstance(c, Token))
+        args = nodes(children, s.Argument)
         seen_named = False
         for arg in args:
             if arg.name is not None:
@@ -180,29 +187,35 @@ class BehaviorExpressionRules:
                 raise OscSyntaxError("positional argument after a named argument", arg.location,
                                      self.source_line(arg.location.line),
                                      "write positional arguments first, then the named ones")
-        return args
+        return ArgumentList(args)
 
     def named_argument(self, children):
-        return s.Argument(self.name(children[0]), children[2], self.loc(children))
+        name, _colon, value = children
+        return s.Argument(self.name(name), value, self.loc(children))
 
     def positional_argument(self, children):
-        return s.Argument(None, children[0], self.loc(children))
+        (value,) = children
+        return s.Argument(None, value, self.loc(children))
 
     # ------------------------------------------------------------------ expressions
 
     def expr(self, children):
+        """A run ``operand (operator operand)*``, with prefix operators, then an optional ``? then : else``."""
         if len(children) == 1:
-            return children[0]
-        if len(children) >= 5 and isinstance(children[-4], Token) and children[-4].value == "?":
-            condition = self._climb(children[:-4])
-            return s.Ternary(condition, children[-3], children[-1], self.span(condition, children[-1]))
+            (only,) = children
+            return only
+        if len(children) >= 5:
+            *run, question, then, _colon, otherwise = children
+            if isinstance(question, Token) and question.value == "?":
+                condition = self._climb(run)
+                return s.Ternary(condition, then, otherwise, self.span(condition, otherwise))
         return self._climb(children)
 
     def _climb(self, items):
         if len(items) == 1:
             return items[0]
-        node, pos = self._climb_from(items, 0, 0)
-        return node
+        tree, _ = self._climb_from(items, 0, 0)
+        return tree
 
     def _climb_from(self, items, pos, min_prec):
         first = items[pos]
@@ -235,41 +248,46 @@ class BehaviorExpressionRules:
         return s.UnaryOp(str(op), operand, loc)
 
     def paren(self, children):
-        return children[1]
+        _open, inner, _close = children
+        return inner
 
     def member(self, children):
-        target, name = children[0], children[2]
+        target, _dot, name = children
         if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
             return s.EventRef(target.path + (self.name(name),), self.loc(children))
         return s.MemberAccess(target, self.name(name), self.loc(children))
 
     def call_expr(self, children):
-        callee = children[0]
+        callee, _open, *inside, _close = children
         if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
             what = "type casts" if callee.member == "as" else "type tests"
             raise self.unsupported(f"{what} (.{callee.member}())", callee.location)
         if isinstance(callee, s.Identifier) and callee.name in UNSUPPORTED_EXPR_CALLS:
             raise self.unsupported(UNSUPPORTED_EXPR_CALLS[callee.name], callee.location)
-        arguments = children[2] if isinstance(children[2], tuple) else ()
-        return s.Call(callee, arguments, self.loc(children))
+        return s.Call(callee, arguments_of(inside), self.loc(children))
 
     def element_access(self, children):
         raise self.unsupported("element access (list[index])", self.loc(children))
 
     def int_lit(self, children):
-        return s.Literal("int", int(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("int", int(str(tok)), self.tloc(tok))
 
     def hex_lit(self, children):
-        return s.Literal("int", int(str(children[0]), 16), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("int", int(str(tok), 16), self.tloc(tok))
 
     def float_lit(self, children):
-        return s.Literal("float", float(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("float", float(str(tok)), self.tloc(tok))
 
     def string_lit(self, children):
-        return s.Literal("string", unescape_string(str(children[0])), self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("string", unescape_string(str(tok)), self.tloc(tok))
 
     def bool_lit(self, children):
-        return s.Literal("bool", children[0].type == "TRUE", self.tloc(children[0]))
+        (tok,) = children
+        return s.Literal("bool", tok.type == "TRUE", self.tloc(tok))
 
     def physical(self, children):
         number, unit = children
@@ -277,29 +295,33 @@ class BehaviorExpressionRules:
         return s.PhysicalLiteral(value, self.name(unit), self.loc(children))
 
     def identifier(self, children):
-        return s.Identifier(self.name(children[0]), self.tloc(children[0]))
+        (tok,) = children
+        return s.Identifier(self.name(tok), self.tloc(tok))
 
     def list_expr(self, children):
-        items = tuple(c for c in children if not isinstance(c, Token))
-        return s.ListExpr(items, self.loc(children))
+        return s.ListExpr(built(children), self.loc(children))
 
     def range_expr(self, children):
-        return s.RangeExpr(children[1], children[3], self.loc(children))
+        _open, low, _dots, high, _close = children
+        return s.RangeExpr(low, high, self.loc(children))
 
     def range_expr_unit(self, children):
         """Foretify's ``[10..50]kph``: the unit after the bracket applies to both (plain number) ends."""
-        unit = self.name(children[5])
-        ends = [_with_unit(end, unit) for end in (children[1], children[3])]
-        return s.RangeExpr(ends[0], ends[1], self.loc(children))
+        _open, low, _dots, high, _close, unit = children
+        name = self.name(unit)
+        return s.RangeExpr(_with_unit(low, name), _with_unit(high, name), self.loc(children))
 
     def enum_ref(self, children):
-        return s.EnumValueRef(self.name(children[0]), self.name(children[2]), self.loc(children))
+        type_name, _bang, member = children
+        return s.EnumValueRef(self.name(type_name), self.name(member), self.loc(children))
 
     def enum_ref_bare(self, children):
-        return s.EnumValueRef(None, self.name(children[1]), self.loc(children))
+        _bang, member = children
+        return s.EnumValueRef(None, self.name(member), self.loc(children))
 
     def event_ref(self, children):
-        return s.EventRef((self.name(children[1]),), self.loc(children))
+        _at, name = children
+        return s.EventRef((self.name(name),), self.loc(children))
 
 
 def _with_unit(end: s.Expression, unit: str) -> s.Expression:

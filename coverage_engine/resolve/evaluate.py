@@ -15,6 +15,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, cast
 
+from coverage_engine.errors import UserError
 from coverage_engine.resolve.model import (
     Const,
     Expr,
@@ -28,12 +29,8 @@ from coverage_engine.resolve.model import (
 )
 
 
-class EvaluationError(Exception):
+class EvaluationError(UserError):
     """An expression could not be computed at run time (e.g. an external method raised)."""
-
-    def __init__(self, message: str, location=None) -> None:
-        super().__init__(message)
-        self.location = location
 
 
 _BINARY: dict[str, Callable] = {

@@ -1,19 +1,25 @@
 """The variation generator: one abstract scenario in, every concrete scenario out.
 
-Passes, in order (each its own module):
+The stages, each a function from one immutable value to the next (:mod:`~coverage_engine.variation.plan`
+holds the values):
 
-* :mod:`~coverage_engine.variation.dimensions` finds every ``keep(… in [...])`` in the syntax tree;
-* :mod:`~coverage_engine.variation.template` cuts the source text into fixed pieces and value slots;
-* :mod:`~coverage_engine.variation.plan` checks each value once and streams the valid combinations;
-* :mod:`~coverage_engine.variation.conditions` turns the keeps that are neither a value nor a list into
-  constraints: which combinations no variant may hold;
-* :mod:`~coverage_engine.variation.strategies` chooses the combinations: the full product, a t-way
-  covering array (:mod:`~coverage_engine.variation.pairwise` builds t = 2 fast) or a seeded sample, whose
-  drawn values :mod:`~coverage_engine.variation.drawn` keeps in one array;
-* :mod:`~coverage_engine.variation.output` renders and writes one ``.sce`` per combination
+* *parsed*: :func:`~coverage_engine.variation.plan.parse_variation` finds every ``keep(… in [...])``
+  (:mod:`~coverage_engine.variation.dimensions`) and cuts the source text into fixed pieces and value
+  slots (:mod:`~coverage_engine.variation.template`);
+* *planned*: :mod:`~coverage_engine.variation.design` draws the points of a sampler (their drawn values
+  kept in one array, :mod:`~coverage_engine.variation.drawn`) or of an adaptive search, or plans the
+  product;
+* *checked*: :mod:`~coverage_engine.variation.checking` resolves each value once and reads the keep
+  conditions (:mod:`~coverage_engine.variation.conditions`): which combinations no variant may hold;
+* *chosen*: :mod:`~coverage_engine.variation.choice` keeps every allowed combination (or a sampler's first
+  ``--samples``, or only the new ones), :mod:`~coverage_engine.variation.covering` a t-way covering array
+  (:mod:`~coverage_engine.variation.pairwise` and :mod:`~coverage_engine.variation.ipog` build t = 2 fast,
+  :mod:`~coverage_engine.variation.covering_size` refuses an array too large before it is built);
+* *written*: :mod:`~coverage_engine.variation.output` renders and writes one ``.sce`` per combination
   (:mod:`~coverage_engine.variation.writer` does the file system calls).
 
-The design and the ``.sce`` format are described in ``docs/variation.md``.
+:mod:`~coverage_engine.variation.strategies` names the strategies and holds what they share. The design
+and the ``.sce`` format are described in ``docs/variation.md``.
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ __all__ = ["plan_variation"]
 
 def __getattr__(name: str):
     if name == "plan_variation":  # imported lazily: the command starts without the resolver
-        from coverage_engine.variation.plan import plan_variation
+        from coverage_engine.variation.choice import plan_variation
 
         return plan_variation
     raise AttributeError(name)

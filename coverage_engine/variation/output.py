@@ -54,7 +54,7 @@ def sce_template(plan: VariationPlan, output_dir: str | os.PathLike) -> SceTempl
         source_dir=relative_source_dir(plan.path.parent, output_dir), scenario=plan.scenario,
         chunks=list(plan.template.chunks), replacements=list(plan.template.replacements),
         keys=plan.keys, shown=plan.shown(), stored=plan.stored(), documents=plan.documents, note=plan.strategy_note,
-        domains=plan_domains(plan))
+        domains=plan_domains(plan), proposal=plan.proposal)
 
 
 def plan_domains(plan: VariationPlan) -> list[InputDomain]:
@@ -221,11 +221,60 @@ class _Batch:
     checkpoint: int
 
 
+class _BatchedRecording:
+    """Sends batches of written variants to the file writer and records each once its files are on disk.
+
+    At most two batches are under way: while the child writes one, the next is rendered.
+    """
+
+    def __init__(self, writer: FileWriter, record: Callable[[list[Generated]], None] | None,
+                 on_item: Callable[[Generated], None] | None) -> None:
+        self.writer, self.record, self.on_item = writer, record, on_item
+        self.batch: list[Generated] = []
+        self.unrecorded: list[_Batch] = []
+        self.written = 0
+
+    def settle(self, keep: int) -> None:
+        """Record every sent batch but the last ``keep`` once its files are on disk."""
+        while len(self.unrecorded) > keep:
+            done = self.unrecorded[0]
+            self.writer.wait(done.checkpoint)
+            if self.record is not None:
+                self.record(done.items)
+            self.unrecorded.pop(0)
+            self.written += len(done.items)
+            if self.on_item is not None:
+                for item in done.items:
+                    self.on_item(item)
+
+    def send(self) -> None:
+        """Hand the batch made so far to the writer; record the one before it."""
+        if self.batch:
+            self.unrecorded.append(_Batch(self.batch.copy(), self.writer.checkpoint()))
+            self.batch.clear()
+        self.settle(keep=1)
+
+    def finish(self) -> None:
+        """Write and record everything sent."""
+        self.send()
+        self.writer.close()
+        self.settle(keep=0)
+
+    def salvage(self) -> None:
+        """After a write failed: record exactly the files of the batches under way that hold their text
+        (the others are absent or still an earlier generation's, whose rows stay right)."""
+        self.writer.end_quietly()
+        landed = [item for done in [*self.unrecorded, _Batch(self.batch, 0)] for item in done.items
+                  if item.path and item.sce_text is not None and _same_content(item.path, item.sce_text.encode())]
+        if landed and self.record is not None:
+            self.record(landed)
+            self.written += len(landed)
+
+
 def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Container[str] = (), *,
              record: Callable[[list[Generated]], None] | None = None,
              on_item: Callable[[Generated], None] | None = None,
-             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE,
-             held: Container[str] = frozenset(), first_index: int = 0) -> GenerationResult:
+             stop: Callable[[], bool] | None = None, batch_size: int = BATCH_SIZE) -> GenerationResult:
     """Write every valid combination of ``plan`` to ``output_dir``, in batches.
 
     For each batch of up to ``batch_size`` valid variants, their files are written (each whole, see
@@ -244,44 +293,23 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
     generation) that already holds exactly the new text is left untouched: regenerating the same input
     rewrites nothing (truncating files is slow on some file systems, and mtimes stay meaningful).
 
-    ``held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
+    ``plan.held`` (``--only-new``): assignments (stored JSON text) already written by earlier runs; such a
     combination is passed over (counted in the result's ``held``), and the others are numbered from
-    ``first_index`` on without gaps.
+    ``plan.first_index`` on without gaps.
     """
+    held, first_index = plan.held, plan.first_index
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
     template = sce_template(plan, folder)
     prefix = str(folder.resolve() / plan.path.stem)
     fragments = _assignment_fragments(plan)
     sha256 = hashlib.sha256
-    written = skipped = passed_over = 0
+    skipped = passed_over = 0
     stopped = False
     renumber = bool(held) or first_index > 0
     next_index = first_index            # when renumbering: the index of the next variant written
-    batch: list[Generated] = []
-    unrecorded: list[_Batch] = []
     writer = FileWriter(background=plan.total >= BACKGROUND_FROM)
-
-    def settle(keep: int) -> None:
-        """Record every sent batch but the last ``keep`` once its files are on disk."""
-        nonlocal written
-        while len(unrecorded) > keep:
-            done = unrecorded[0]
-            writer.wait(done.checkpoint)
-            if record is not None:
-                record(done.items)
-            unrecorded.pop(0)
-            written += len(done.items)
-            if on_item is not None:
-                for item in done.items:
-                    on_item(item)
-
-    def send() -> None:
-        if batch:
-            unrecorded.append(_Batch(batch.copy(), writer.checkpoint()))
-            batch.clear()
-        settle(keep=1)
-
+    batches = _BatchedRecording(writer, record, on_item)
     try:
         for index, choices, rejection in plan.combinations():
             if stop is not None and stop():
@@ -302,28 +330,19 @@ def generate(plan: VariationPlan, output_dir: str | os.PathLike, existing: Conta
             text = template.render(index, choices, spelled)
             data = text.encode("utf-8")
             path = f"{prefix}{index}{SCE_SUFFIX}"
-            batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
+            batches.batch.append(Generated(index, choices, path, text, sha256(data).hexdigest(), assignment, None))
             earlier = bool(existing) and os.path.basename(path) in existing
             if not (earlier and _same_content(path, data)):
                 writer.write(path, data, replace=earlier)
-            if len(batch) >= batch_size:
-                send()
-        send()
-        writer.close()
-        settle(keep=0)
+            if len(batches.batch) >= batch_size:
+                batches.send()
+        batches.finish()
     except OSError as exc:
-        writer.end_quietly()
-        # The batches under way were written in part: record exactly the files that hold their text
-        # (the others are absent or still an earlier generation's, whose rows stay right).
-        landed = [item for done in [*unrecorded, _Batch(batch, 0)] for item in done.items
-                  if item.path and item.sce_text is not None and _same_content(item.path, item.sce_text.encode())]
-        if landed and record is not None:
-            record(landed)
-            written += len(landed)
-        raise VariantWriteError(exc, written) from exc
+        batches.salvage()
+        raise VariantWriteError(exc, batches.written) from exc
     finally:
         writer.end_quietly()
-    return GenerationResult(written, skipped, stopped, passed_over)
+    return GenerationResult(batches.written, skipped, stopped, passed_over)
 
 
 def _assignment(fragments: list[Sequence[str]], choices: tuple[int, ...], spelled: list[str | None]) -> str:

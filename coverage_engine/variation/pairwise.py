@@ -106,26 +106,44 @@ def compact(rows: list[tuple[int, ...]], n: int, fixed: Sequence[tuple[int, ...]
 
 
 def _compact_once(rows: list[tuple[int, ...]], n: int, fixed: Sequence[tuple[int, ...]]) -> list[tuple[int, ...]]:
-    table = [list(r) for r in rows]
-    count: dict[tuple[int, int, int, int], int] = {}
-    for kept in [*fixed, *rows]:
-        for i in range(n):
-            for j in range(i + 1, n):
-                key = (i, j, kept[i], kept[j])
-                count[key] = count.get(key, 0) + 1
+    """One pass: each row, fewest unique pairs first, goes when other rows can be changed to take its pairs."""
+    pairs = _PairCounts(rows, n, fixed)
+    for r in sorted(range(len(pairs.table)), key=lambda r: len(pairs.unique(r))):
+        pairs.try_remove(r)
+    return [tuple(row) for k, row in enumerate(pairs.table) if pairs.alive[k]]
 
+
+#: One change of a row: (row, axis, value before).
+_Change = tuple[int, int, int]
+
+
+class _PairCounts:
+    """The rows being compacted and how many rows (the fixed ones too) hold each pair of values."""
+
+    def __init__(self, rows: list[tuple[int, ...]], n: int, fixed: Sequence[tuple[int, ...]]) -> None:
+        self.n = n
+        self.table = [list(r) for r in rows]
+        self.alive = [True] * len(rows)
+        self.count: dict[tuple[int, int, int, int], int] = {}
+        for kept in [*fixed, *rows]:
+            for i in range(n):
+                for j in range(i + 1, n):
+                    key = (i, j, kept[i], kept[j])
+                    self.count[key] = self.count.get(key, 0) + 1
+
+    @staticmethod
     def pair(i: int, c: int, vi: int, vc: int) -> tuple[int, int, int, int]:
         return (i, c, vi, vc) if i < c else (c, i, vc, vi)
 
-    def change(k: int, axis: int, new: int, log: list) -> bool:
+    def change(self, k: int, axis: int, new: int, log: list[_Change]) -> bool:
         """Set row ``k``'s ``axis`` to ``new`` if every pair it holds there is covered elsewhere too."""
-        row = table[k]
+        row, count, pair = self.table[k], self.count, self.pair
         old = row[axis]
         if old == new:
             return True
-        if any(count[pair(axis, c, old, row[c])] < 2 for c in range(n) if c != axis):
+        if any(count[pair(axis, c, old, row[c])] < 2 for c in range(self.n) if c != axis):
             return False
-        for c in range(n):
+        for c in range(self.n):
             if c != axis:
                 count[pair(axis, c, old, row[c])] -= 1
                 key = pair(axis, c, new, row[c])
@@ -134,36 +152,38 @@ def _compact_once(rows: list[tuple[int, ...]], n: int, fixed: Sequence[tuple[int
         log.append((k, axis, old))
         return True
 
-    def undo(log: list) -> None:
+    def undo(self, log: list[_Change]) -> None:
+        """Take the changes of ``log`` back, last first."""
         for k, axis, old in reversed(log):
-            row = table[k]
+            row = self.table[k]
             new = row[axis]
-            for c in range(n):
+            for c in range(self.n):
                 if c != axis:
-                    count[pair(axis, c, new, row[c])] -= 1
-                    count[pair(axis, c, old, row[c])] += 1
+                    self.count[self.pair(axis, c, new, row[c])] -= 1
+                    self.count[self.pair(axis, c, old, row[c])] += 1
             row[axis] = old
 
-    def unique(r: int) -> list[tuple[int, int]]:
-        row = table[r]
-        return [(i, j) for i in range(n) for j in range(i + 1, n) if count[(i, j, row[i], row[j])] == 1]
+    def unique(self, r: int) -> list[tuple[int, int]]:
+        """The axis pairs whose values row ``r`` alone holds."""
+        row, n = self.table[r], self.n
+        return [(i, j) for i in range(n) for j in range(i + 1, n) if self.count[(i, j, row[i], row[j])] == 1]
 
-    alive = [True] * len(table)
-    for r in sorted(range(len(table)), key=lambda r: len(unique(r))):
-        row = table[r]
-        log: list = []
+    def try_remove(self, r: int) -> None:
+        """Move each pair only row ``r`` holds into another live row; drop ``r`` if all moved, else undo."""
+        row, n, count = self.table[r], self.n, self.count
+        log: list[_Change] = []
         moved = True
-        for i, j in unique(r):
+        for i, j in self.unique(r):
             if count[(i, j, row[i], row[j])] >= 2:
                 continue
-            targets = sorted((k for k in range(len(table)) if k != r and alive[k]),
-                             key=lambda k: (table[k][i] != row[i]) + (table[k][j] != row[j]))
+            targets = sorted((k for k in range(len(self.table)) if k != r and self.alive[k]),
+                             key=lambda k: (self.table[k][i] != row[i]) + (self.table[k][j] != row[j]))
             for k in targets:
-                step: list = []
-                if change(k, i, row[i], step) and change(k, j, row[j], step):
+                step: list[_Change] = []
+                if self.change(k, i, row[i], step) and self.change(k, j, row[j], step):
                     log += step
                     break
-                undo(step)
+                self.undo(step)
             else:
                 moved = False
                 break
@@ -171,7 +191,6 @@ def _compact_once(rows: list[tuple[int, ...]], n: int, fixed: Sequence[tuple[int
             for i in range(n):
                 for j in range(i + 1, n):
                     count[(i, j, row[i], row[j])] -= 1
-            alive[r] = False
+            self.alive[r] = False
         else:
-            undo(log)
-    return [tuple(row) for k, row in enumerate(table) if alive[k]]
+            self.undo(log)

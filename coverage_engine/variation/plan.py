@@ -1,4 +1,17 @@
-"""Plan a variation: find the dimensions, check every value once, then stream the valid combinations.
+"""The values a variation passes from stage to stage, and its first stage: parse the source, find its axes.
+
+A variation is a chain of functions, each from one immutable value to the next::
+
+    parse_variation → ParsedVariation           the source, its dimensions, the text template
+    design (or design_points) → PlannedVariation   the rows a sampler or a search drew (or the product)
+    check_values → CheckedVariation             each value resolved once, the keep conditions read
+    choose_all / choose_covering / only_new → VariationPlan   the combinations to write
+    output.generate → files                     one ``.sce`` per valid combination
+
+Each stage's value is a subclass of the one before, so a later stage reads everything an earlier one
+found, and :func:`advance` makes it from the previous value (nothing is filled in afterwards).
+
+Checking (:mod:`coverage_engine.variation.checking`) does not resolve every combination.
 
 Why not resolve every combination? 100,000 variants would mean 100,000 resolutions. Instead each
 dimension is a *slot* that only its own keep fills, so a value is checked once, in its slot, with
@@ -23,29 +36,26 @@ more slot (its choice is the overrides passed to the resolver). See ``docs/varia
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from coverage_engine.errors import OscError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
+from coverage_engine.proposals import Proposal
 from coverage_engine.resolve.overrides import scenario_overrides
-from coverage_engine.variation.conditions import (
-    ConstraintTables,
-    Evaluate,
-    condition_evaluator,
-    find_conditions,
-)
 from coverage_engine.variation.dimensions import Dimension, find_dimensions, scenario_names
 from coverage_engine.variation.drawn import DrawnChoices
 from coverage_engine.variation.template import TextTemplate
 
 if TYPE_CHECKING:
     from coverage_engine.resolve.model import ScenarioFile
+    from coverage_engine.variation.conditions import ConstraintTables
 
 #: ``(concrete text, overrides) -> resolved model``; raises :class:`OscError` when it does not resolve.
 Resolve = Callable[[str, "Mapping | None"], "ScenarioFile"]
@@ -92,46 +102,35 @@ class Rejection:
     skipped: int = 0
 
 
-@dataclass
-class VariationPlan:
-    """Everything needed to generate: axes (dimensions, then documents), template, checked values."""
+@dataclass(frozen=True)
+class ParsedVariation:
+    """Stage 1, *parsed*: the source, its varied dimensions (axes), the text template and the value slots.
+
+    Each later stage is a subclass that adds what its step found, made by a function from the previous
+    value (:func:`advance`); nothing is filled in afterwards. The axes are the dimensions, then the
+    parameter-document axis when a parameter file was given.
+    """
 
     path: Path
     text: str
     unit: syntax.CompilationUnit
-    dimensions: list[Dimension]
-    documents: list[dict] | None
+    dimensions: tuple[Dimension, ...]
+    documents: tuple[dict, ...] | None
     template: TextTemplate
-    slots: list[Slot]
+    slots: tuple[Slot, ...]
     scenario: str
-    resolutions: int = 0
-    rejections: list[Rejection] = field(default_factory=list)
-    _bad: list[set[int]] = field(default_factory=list)
-    #: The combinations a strategy chose (choice index per axis), in generation order; None: the full product.
-    rows: list[tuple[int, ...]] | None = None
-    #: The choice per axis every value was checked against (set by :func:`check_plan`).
-    reference: list[int] = field(default_factory=list)
-    #: The keep conditions and what they forbid (None: the file has none).
-    constraints: ConstraintTables | None = None
-    #: Per condition text, how many combinations (full product or drawn rows) it left out.
-    excluded_by: dict[str, int] = field(default_factory=dict)
-    #: How the variants were chosen (``strategy lhs, samples 200, seed 7``), written in each ``.sce`` header.
-    strategy_note: str | None = None
-    #: The number of points a sampler was asked for (``--samples``), recorded with each drawn range.
-    design_samples: int | None = None
 
-    # -- axes ---------------------------------------------------------------------------------------
-
-    @property
+    @functools.cached_property
     def sizes(self) -> list[int]:
-        """Number of choices per axis (each dimension, then the document axis if any)."""
+        """Number of choices per axis (each dimension, then the document axis if any). Do not change it."""
         sizes = [len(d.choices) for d in self.dimensions]
         if self.documents is not None:
             sizes.append(len(self.documents))
         return sizes
 
-    @property
+    @functools.cached_property
     def keys(self) -> list[str]:
+        """The assignment key of each axis. Do not change it."""
         keys = [d.key for d in self.dimensions]
         if self.documents is not None:
             keys.append(DOCUMENT_KEY)
@@ -153,16 +152,6 @@ class VariationPlan:
             stored.append(list(range(len(self.documents))))
         return stored
 
-    @property
-    def excluded(self) -> int:
-        """Combinations left out because they break a keep condition."""
-        return sum(self.excluded_by.values())
-
-    @property
-    def total(self) -> int:
-        """Number of combinations (valid and skipped)."""
-        return math.prod(self.sizes) if self.rows is None else len(self.rows)
-
     def assignment(self, choices: Sequence[int]) -> dict[str, object]:
         return {key: values[c] for key, values, c in zip(self.keys, self.stored(), choices, strict=True)}
 
@@ -178,14 +167,81 @@ class VariationPlan:
         """The concrete ``.osc`` text of a combination (line numbers as in the source)."""
         return self.template.render(choices)
 
-    # -- combinations -------------------------------------------------------------------------------
+    def with_dimensions(self, dimensions: Sequence[Dimension]) -> ParsedVariation:
+        """The same source with ``dimensions`` as its axes (a sampler's drawn values as the choices of a range)."""
+        dims = tuple(dimensions)
+        return ParsedVariation(path=self.path, text=self.text, unit=self.unit, dimensions=dims,
+                               documents=self.documents, template=TextTemplate.build(self.text, list(dims)),
+                               slots=_slots(list(dims), self.documents), scenario=self.scenario)
+
+
+@dataclass(frozen=True)
+class PlannedVariation(ParsedVariation):
+    """Stage 2, *planned*: the design a strategy chose before any value is checked.
+
+    ``rows`` are the combinations a sampler (or an adaptive search) drew, one choice index per axis, in
+    generation order; None means the full product (``full``, and a covering array until it is chosen).
+    """
+
+    rows: tuple[tuple[int, ...], ...] | None = None
+    #: How the variants were chosen (``strategy lhs, samples 200, seed 7``), written in each ``.sce`` header.
+    strategy_note: str | None = None
+    #: The number of points a sampler was asked for (``--samples``), recorded with each drawn range.
+    design_samples: int | None = None
+    #: The round and source results of an adaptive search, written as each ``.sce``'s proposal line.
+    proposal: Proposal | None = None
+
+    @property
+    def total(self) -> int:
+        """Number of combinations (valid and skipped)."""
+        return math.prod(self.sizes) if self.rows is None else len(self.rows)
+
+
+@dataclass(frozen=True)
+class CheckedVariation(PlannedVariation):
+    """Stage 3, *checked*: every value resolved once (see the module docstring), the keep conditions found."""
+
+    #: The choice per axis every value was checked against.
+    reference: tuple[int, ...] = ()
+    #: Per slot, the options (value combinations of its dimensions) that do not resolve.
+    bad: tuple[frozenset[int], ...] = ()
+    rejections: tuple[Rejection, ...] = ()
+    #: The keep conditions and what they forbid (None: the file has none).
+    constraints: ConstraintTables | None = None
+    #: Resolutions spent checking values and conditions.
+    resolutions: int = 0
+
+    def bad_options(self) -> tuple[frozenset[int], ...]:
+        """Per slot, the options (value combinations of its dimensions) that do not resolve."""
+        return self.bad or tuple(frozenset() for _ in self.slots)
+
+
+@dataclass(frozen=True)
+class VariationPlan(CheckedVariation):
+    """Stage 4, *chosen*: the combinations to write, in generation order; what :func:`~coverage_engine.
+    variation.output.generate` writes one ``.sce`` per valid combination of."""
+
+    #: Per condition text, how many combinations (full product or drawn rows) it left out.
+    excluded_by: Mapping[str, int] = field(default_factory=dict)
+    #: ``--only-new``: assignments (stored JSON text) earlier runs wrote; passed over when writing.
+    held: frozenset[str] = frozenset()
+    #: The index of the first variant written (``--only-new`` numbers after the earlier runs).
+    first_index: int = 0
+    #: ``--only-new``: the variants are added to the earlier runs' files, which none of them replaces.
+    adds_to_earlier: bool = False
+
+    @property
+    def excluded(self) -> int:
+        """Combinations left out because they break a keep condition."""
+        return sum(self.excluded_by.values())
 
     def combinations(self) -> Iterator[tuple[int, tuple[int, ...], Rejection | None]]:
         """``(index, choices, rejection)`` for every combination in generation order.
 
         ``rejection`` is None for a valid combination, else the first bad value it contains.
         """
-        checks = [(slot, self._bad[i], self._rejection_of(i)) for i, slot in enumerate(self.slots) if self._bad[i]]
+        bad = self.bad_options()
+        checks = [(slot, bad[i], self._rejection_of(i)) for i, slot in enumerate(self.slots) if bad[i]]
         product: Iterator[tuple[int, ...]] = iter(self.rows) if self.rows is not None else \
             itertools.product(*(range(n) for n in self.sizes))
         if not checks:
@@ -194,9 +250,9 @@ class VariationPlan:
             return
         for index, choices in enumerate(product):
             rejection = None
-            for slot, bad, reasons in checks:
+            for slot, slot_bad, reasons in checks:
                 option = slot.option(choices)
-                if option in bad:
+                if option in slot_bad:
                     rejection = reasons[option]
                     break
             yield index, choices, rejection
@@ -205,17 +261,23 @@ class VariationPlan:
         """Number of combinations without a bad value (computed for the product, counted for chosen rows)."""
         if self.rows is not None:
             return sum(1 for _, _, rejection in self.combinations() if rejection is None)
-        return math.prod(slot.count - len(bad) for slot, bad in zip(self.slots, self._bad, strict=True))
-
-    def bad_options(self) -> list[set[int]]:
-        """Per slot, the options (value combinations of its dimensions) that do not resolve."""
-        return self._bad
+        return math.prod(slot.count - len(bad) for slot, bad in zip(self.slots, self.bad_options(), strict=True))
 
     def _rejection_of(self, slot_index: int) -> dict[int, Rejection]:
         return {r.option: r for r in self.rejections if r.slot is self.slots[slot_index]}
 
 
-def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
+Stage = TypeVar("Stage", bound=ParsedVariation)
+
+
+def advance(value: ParsedVariation, stage: type[Stage], **found: Any) -> Stage:
+    """The next stage's value: every field of ``value`` (its own stage and those before), plus ``found``."""
+    carried = {f.name: getattr(value, f.name) for f in fields(value) if f.name not in found}
+    known = {f.name for f in fields(stage)}
+    return stage(**{name: v for name, v in carried.items() if name in known}, **found)
+
+
+def _slots(dimensions: Sequence[Dimension], documents: Sequence | None) -> tuple[Slot, ...]:
     """Group dimensions on the same target into one slot; the documents are a slot of their own."""
     groups: dict[tuple, list[int]] = {}
     for i, dim in enumerate(dimensions):
@@ -223,7 +285,7 @@ def _slots(dimensions: list[Dimension], documents: list | None) -> list[Slot]:
     slots = [Slot(tuple(ids), tuple(len(dimensions[i].choices) for i in ids)) for ids in groups.values()]
     if documents is not None:
         slots.append(Slot((len(dimensions),), (len(documents),)))
-    return slots
+    return tuple(slots)
 
 
 def default_resolver(path: Path) -> Resolve:
@@ -243,23 +305,9 @@ def default_resolver(path: Path) -> Resolve:
     return run
 
 
-def plan_variation(path: str | Path, documents: list[dict] | None = None, *,
-                   resolver: Resolve | None = None, text: str | None = None) -> VariationPlan:
-    """Parse ``path``, find its dimensions and check each value (see the module docstring).
-
-    ``documents`` are the documents of a scenario parameter file (None: no file). Raises
-    :class:`OscError` when the file cannot be parsed or does not resolve whatever the values.
-    """
-    plan = build_plan(path, documents, text=text)
-    check_plan(plan, resolver)
-    return plan
-
-
-def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: str | None = None) -> VariationPlan:
-    """Parse ``path`` and find its dimensions, without checking any value (``plan.total`` is known).
-
-    :func:`check_plan` must be called before the plan's combinations are used.
-    """
+def parse_variation(path: str | Path, documents: Sequence[dict] | None = None, *,
+                    text: str | None = None) -> ParsedVariation:
+    """Stage 1: parse ``path`` and find its dimensions, without checking any value (``sizes`` are known)."""
     from coverage_engine.parse.parser import parse_text
 
     path = Path(path)
@@ -283,173 +331,7 @@ def build_plan(path: str | Path, documents: list[dict] | None = None, *, text: s
     names = scenario_names(unit)
     varied = [d.scenario for d in dimensions]
     scenario = varied[0] if varied else (names[0] if names else "")
-    plan = VariationPlan(path=path, text=text, unit=unit, dimensions=dimensions,
-                         documents=None if documents is None else list(documents),
-                         template=TextTemplate.build(text, dimensions),
-                         slots=_slots(dimensions, documents), scenario=scenario)
-    plan._bad = [set() for _ in plan.slots]
-    return plan
-
-
-def check_plan(plan: VariationPlan, resolver: Resolve | None = None, evaluate: Evaluate | None = None, *,
-               exclude: bool = True) -> None:
-    """Steps 1 and 2 of the module docstring (raises :class:`OscError` if no value makes the file resolve),
-    then the keep conditions: the combinations (or drawn rows) that break one are left out.
-
-    ``exclude`` False finds what the conditions forbid without listing the combinations left (a covering
-    array is built around them instead of filtering the full product, which may be astronomically large).
-    """
-    _check(plan, resolver or default_resolver(plan.path))
-    conditions = find_conditions(plan.unit, plan.text, plan.dimensions, plan.documents is not None)
-    if not conditions:
-        return
-    plan.constraints = ConstraintTables(
-        conditions, plan.sizes, plan.reference, lambda c: (plan.concrete_text(c), plan.overrides(c)),
-        evaluate or condition_evaluator(plan.path),
-        frozenset(i for i, d in enumerate(plan.dimensions) if d.continuous is not None))
-    plan.resolutions += plan.constraints.resolutions
-    if not exclude or not any(c.forbidden or c.per_row for c in conditions):
-        return
-    if plan.rows is None:
-        plan.rows = list(itertools.product(*(range(n) for n in plan.sizes)))
-    exclude_rows(plan)
-
-
-def exclude_rows(plan: VariationPlan) -> None:
-    """Leave out the rows of ``plan.rows`` that break a keep condition (counted in ``plan.excluded``)."""
-    if plan.constraints is None or plan.rows is None:
-        return
-    kept = []
-    for row in plan.rows:
-        broken = plan.constraints.violated(row)
-        if broken is None:
-            kept.append(row)
-        else:
-            plan.excluded_by[broken.text] = plan.excluded_by.get(broken.text, 0) + 1
-    plan.rows = kept
-
-
-def _check(plan: VariationPlan, resolver: Resolve) -> None:
-    """Steps 1 and 2 of the module docstring: find good reference values, then check all others."""
-    slots = plan.slots
-    plan._bad = [set() for _ in slots]
-    errors: list[dict[int, OscError]] = [{} for _ in slots]
-
-    def attempt(options: list[int]) -> OscError | None:
-        choices = [0] * len(plan.sizes)
-        for slot, option in zip(slots, options, strict=True):
-            for dim, choice in slot.choices(option).items():
-                choices[dim] = choice
-        plan.resolutions += 1
-        try:
-            resolver(plan.concrete_text(choices), plan.overrides(choices))
-        except OscError as exc:
-            return exc
-        return None
-
-    def next_good(s: int, after: int) -> int | None:
-        return next((o for o in range(after + 1, slots[s].count) if o not in errors[s]), None)
-
-    reference = [0] * len(slots)
-    while (error := attempt(reference)) is not None:
-        culprit = _attribute(plan, error)
-        if culprit is None:
-            culprit = _search(slots, reference, errors, attempt)
-            if culprit is None:
-                raise error
-        errors[culprit][reference[culprit]] = error
-        following = next_good(culprit, reference[culprit])
-        if following is None:  # every value of this slot fails: every combination does
-            break
-        reference[culprit] = following
-    else:
-        plan.reference = [0] * len(plan.sizes)
-        for slot, option in zip(slots, reference, strict=True):
-            for dim, choice in slot.choices(option).items():
-                plan.reference[dim] = choice
-        for s, slot in enumerate(slots):
-            for option in _options_to_check(plan, slot):
-                if option != reference[s] and option not in errors[s]:
-                    trial = list(reference)
-                    trial[s] = option
-                    if (error := attempt(trial)) is not None:
-                        errors[s][option] = error
-    _record(plan, errors)
-
-
-def _options_to_check(plan: VariationPlan, slot: Slot) -> Sequence[int]:
-    """The options of ``slot`` to resolve once each: all of them, except for a drawn continuous range.
-
-    Values drawn from one range are literals of the same kind and unit between its ends, so the
-    smallest and the largest drawn value stand for all of them (100,000 draws need 2 resolutions, not
-    100,000).
-    """
-    if len(slot.dims) == 1 and slot.dims[0] < len(plan.dimensions):
-        dim = plan.dimensions[slot.dims[0]]
-        if dim.continuous is not None and dim.choices:
-            values = list(dim.choices.values) if isinstance(dim.choices, DrawnChoices) else \
-                [c.stored for c in dim.choices]
-            return sorted({values.index(min(values)), values.index(max(values))})  # type: ignore[type-var]
-    return range(slot.count)
-
-
-def _attribute(plan: VariationPlan, error: OscError) -> int | None:
-    """The slot whose varied constraint holds the error's line, if any."""
-    loc = error.location
-    if loc is None or loc.file != str(plan.path):
-        return None
-    for s, slot in enumerate(plan.slots):
-        for dim in slot.dims:
-            if dim < len(plan.dimensions):
-                where = plan.dimensions[dim].location
-                if where.line <= loc.line <= max(where.end_line, where.line):
-                    return s
-    return None
-
-
-def _search(slots: list[Slot], reference: list[int], errors: list[dict[int, OscError]],
-            attempt: Callable[[list[int]], OscError | None]) -> int | None:
-    """Move one slot at a time to another value; the slot whose move makes it resolve is the culprit."""
-    for s, slot in enumerate(slots):
-        for option in range(slot.count):
-            if option == reference[s] or option in errors[s]:
-                continue
-            trial = list(reference)
-            trial[s] = option
-            if attempt(trial) is None:
-                return s
-    return None
-
-
-def _blamed_dim(plan: VariationPlan, slot: Slot, error: OscError) -> int:
-    """The dimension of ``slot`` whose keep holds the error's line (else its first dimension).
-
-    Several keeps on one parameter share a slot; the value to point at is the one in the keep the
-    resolver complained about.
-    """
-    loc = error.location
-    if loc is not None and loc.file == str(plan.path):
-        for dim in slot.dims:
-            if dim < len(plan.dimensions):
-                where = plan.dimensions[dim].location
-                if where.line <= loc.line <= max(where.end_line, where.line):
-                    return dim
-    return slot.dims[0]
-
-
-def _record(plan: VariationPlan, errors: list[dict[int, OscError]]) -> None:
-    plan._bad = [set(e) for e in errors]
-    shown = plan.shown()
-    for s, slot in enumerate(plan.slots):
-        others = math.prod(o.count for i, o in enumerate(plan.slots) if i != s)
-        for option, error in sorted(errors[s].items()):
-            choices = slot.choices(option)
-            keys = plan.keys
-            location = None
-            blamed = _blamed_dim(plan, slot, error)
-            if blamed < len(plan.dimensions):
-                location = plan.dimensions[blamed].choices[choices[blamed]].location
-            plan.rejections.append(Rejection(
-                slot=slot, option=option, error=error,
-                shown={keys[d]: shown[d][c] for d, c in sorted(choices.items())},
-                location=location, skipped=others))
+    docs = None if documents is None else tuple(documents)
+    return ParsedVariation(path=path, text=text, unit=unit, dimensions=tuple(dimensions), documents=docs,
+                           template=TextTemplate.build(text, dimensions), slots=_slots(dimensions, docs),
+                           scenario=scenario)

@@ -41,8 +41,10 @@ from collections.abc import Callable
 
 import py_trees
 
+from coverage_engine.errors import UserError
 
-class ActionError(Exception):
+
+class ActionError(UserError):
     """An action cannot do what it was asked (bad argument, missing resource): the scenario fails."""
 
 

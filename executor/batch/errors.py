@@ -1,13 +1,13 @@
-"""Errors of the batch runner; each class's docstring is its default message, ``cli/`` prints them."""
+"""Errors of the batch runner, in the one tree of user errors; each class's docstring is its default
+message, ``cli/boundary.py`` prints them."""
 
 from __future__ import annotations
 
+from coverage_engine.errors import UserError
 
-class BatchError(Exception):
+
+class BatchError(UserError):
     """The batch cannot be run as asked."""
-
-    def __init__(self, message: str | None = None) -> None:
-        super().__init__(message or (self.__doc__ or "").strip())
 
 
 class NoScenarios(BatchError):
@@ -16,6 +16,8 @@ class NoScenarios(BatchError):
 
 class BatchUsageError(BatchError):
     """The command line asks for something malformed (``cli/`` exits 2, as for a bad option)."""
+
+    usage = True
 
 
 class BadCommand(BatchUsageError):

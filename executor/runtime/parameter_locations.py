@@ -59,7 +59,7 @@ def locate(path: str, document_index: int, message: str) -> tuple[Location, str 
     """
     import yaml
 
-    whole_file = Location(str(path), 0, 0)
+    whole_file = Location.whole_file(str(path))
     try:
         with open(path, encoding="utf-8") as handle:
             text = handle.read()

@@ -17,7 +17,7 @@ import sys
 from collections.abc import Sequence
 
 from coverage_engine.domains import drawn_units_of
-from coverage_engine.errors import OscError
+from coverage_engine.errors import OscError, UserError
 from coverage_engine.results.files import RESULT_FILE
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.runtime.logger import Logger
@@ -26,7 +26,7 @@ EXIT_OK = 0
 EXIT_FAILED = 1
 
 
-class UsageProblem(Exception):
+class UsageProblem(UserError):
     """A bad option value or combination (reported as ``error: …``)."""
 
 

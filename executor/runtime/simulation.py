@@ -29,8 +29,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from coverage_engine.errors import UserError
 
-class SimulationError(Exception):
+
+class SimulationError(UserError):
     """A simulation could not be loaded, or does not fit the scenario (e.g. missing reset arguments)."""
 
 

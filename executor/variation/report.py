@@ -16,7 +16,7 @@ from coverage_engine.printable import printable_lines
 from executor.output.terminal import wants_rich
 
 if TYPE_CHECKING:
-    from coverage_engine.variation.plan import VariationPlan
+    from coverage_engine.variation.plan import ParsedVariation, VariationPlan
 
 #: Variants from which a terminal gets a rich progress bar.
 RICH_PROGRESS_FROM = 2000
@@ -50,7 +50,7 @@ def duration_text(seconds: float) -> str:
     return f"{seconds / (86400 * 365.25):.3g} years"
 
 
-def slot_sizes(plan: VariationPlan) -> str:
+def slot_sizes(plan: ParsedVariation) -> str:
     """Choices per independent slot, ``8 x 8 x 8`` (keeps on the same parameter count as one)."""
     return " x ".join(str(slot.count) for slot in plan.slots)
 

@@ -448,3 +448,23 @@ scenario job:
         running += step
         most = max(most, running)
     assert most == 2
+
+
+def test_the_fork_server_makes_a_jobs_folder_and_refuses_one_planted_as_a_link(tmp_path):
+    """A built-in job's folder and log are made by the fork server as the job starts (not by the batch
+    process); a folder planted as a link is refused there as the batch process refused it: the job is
+    an error that says so, nothing is written through the link, the other jobs run."""
+    env = make_variants(tmp_path, ["p0", "p1", "p2"])
+    victim = tmp_path / "victim"
+    victim.mkdir()
+    (tmp_path / "res").mkdir()
+    (tmp_path / "res" / "job1").symlink_to(victim)
+    done = run_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert list(victim.iterdir()) == []
+    errors = {c.get("name"): c.find("error") for c in ET.parse(tmp_path / "res/test.xml").getroot().iter("testcase")}
+    refused = [e for e in errors.values() if e is not None]
+    assert len(refused) == 1 and refused[0].get("message", "").startswith("cannot prepare the job: the job folder")
+    assert "symbolic link" in refused[0].get("message", "")
+    assert sorted(row[0] for row in records(tmp_path)) == ["p0", "p2"]
+    assert all((tmp_path / f"res/job{i}/log.txt").is_file() for i in (0, 2))

@@ -63,6 +63,10 @@ class ForkServerError(OSError):
     """The fork server could not be started, or ended."""
 
 
+class JobFolderRefused(ForkServerError):
+    """The server could not make the job's folder (a full disk, a folder that leads elsewhere)."""
+
+
 class ForkedProcess:
     """A job forked by the server, with the subset of ``subprocess.Popen`` that ChildProcess uses."""
 
@@ -94,6 +98,7 @@ class _Pending:
         self.pid: int | None = None
         self.reason: str | None = None
         self.errno: int | None = None              # why the server could not start it, as an OSError's
+        self.folder_refused = False                # … because the job's folder could not be made
         self.withdrawn = False
 
 
@@ -173,9 +178,10 @@ class ForkServer:
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
               output_fd: int | None = None, stdout: BinaryIO | None = None,
               ticket: StartTicket | None = None, log_path: str | None = None,
-              append: bool = False) -> ForkedProcess | None:
+              append: bool = False, log_folder: tuple[str, str] | None = None) -> ForkedProcess | None:
         """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``, or
-        to ``log_path``, which the server opens as the job starts (this process makes no file per job);
+        to ``log_path``, which the server opens as the job starts (this process makes no file per job),
+        after making its folder when ``log_folder`` says under which root (the root, its real path);
         waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
         request_id = str(next(self._ids))
         pending = _Pending()
@@ -190,7 +196,7 @@ class ForkServer:
                 return None
             request: dict[str, object] = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)}
             if output_fd is None:
-                request.update(log=log_path, append=append)
+                request.update(log=log_path, append=append, folder=log_folder)
             try:
                 send(self._sock, request, None if output_fd is None else [output_fd])
             except OSError as exc:
@@ -202,6 +208,8 @@ class ForkServer:
         if pending.withdrawn:
             return None
         if pending.pid is None:
+            if pending.folder_refused:
+                raise JobFolderRefused(pending.errno, pending.reason)
             message = f"the built-in runner could not start the job: {pending.reason}"
             raise ForkServerError(message) if pending.errno is None else ForkServerError(pending.errno, message)
         process = ForkedProcess(pending.pid, stdout)
@@ -263,6 +271,7 @@ class ForkServer:
                 pending.pid = message.get("pid") if event == "started" else None
                 pending.reason = message.get("reason")
                 pending.errno = message.get("errno")
+                pending.folder_refused = bool(message.get("folder"))
                 pending.withdrawn = event == "withdrawn"
                 pending.event.set()
         elif event == "exited":

@@ -45,7 +45,7 @@ import signal
 import socket
 import sys
 
-from executor.batch.fork_protocol import ENTRY_POINT, open_log, receive, send
+from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, open_log, receive, send
 
 
 class Command:
@@ -375,8 +375,10 @@ class _Server:
                 try:
                     fd = open_log(request)
                 except OSError as exc:
-                    send(self.sock, {"id": request_id, "event": "failed", "errno": exc.errno,
-                                     "reason": f"cannot open its log {request['log']}: {exc.strerror or exc}"})
+                    refused = isinstance(exc, FolderRefused)
+                    send(self.sock, {"id": request_id, "event": "failed", "errno": exc.errno, "folder": refused,
+                                     "reason": f"cannot prepare the job: {exc.strerror}" if refused else
+                                     f"cannot open its log {request['log']}: {exc.strerror or exc}"})
                     continue
             self._spawn(request, fd)
 

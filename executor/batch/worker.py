@@ -240,8 +240,14 @@ class Worker:
         problem: str | None = None
         full_disk = False                   # the problem is a full disk: the job is stopped, not judged
         made_folder = False
+        echo = self.settings.echo if self.settings.slots == 1 else None
+        # a built-in job's folder is made by the fork server as the job starts (not by this process)
+        folder_root = None
         try:
-            made_folder = self._folders.prepare(root, output_dir)
+            if batch.command or echo is not None:
+                made_folder = self._folders.prepare(root, output_dir)
+            else:
+                folder_root = (str(root), self._folders.real_root(root))
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
@@ -258,10 +264,9 @@ class Worker:
             except ForkServerError as exc:
                 problem = str(exc)
         order = self.hand_over.order
-        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
-                     echo=self.settings.echo if self.settings.slots == 1 else None,
+        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
                      environment={RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)},
-                     launcher=launcher, made_folder=made_folder,
+                     launcher=launcher, made_folder=made_folder, folder_root=folder_root,
                      order=(order, order.take()))
         self._runs[job.id] = run
         self._started += 1

@@ -74,9 +74,10 @@ class Launcher(Protocol):
 
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
               output_fd: int | None = None, stdout: BinaryIO | None = None, ticket: StartTicket | None = None,
-              log_path: str | None = None, append: bool = False) -> Any:
+              log_path: str | None = None, append: bool = False, log_folder: tuple[str, str] | None = None) -> Any:
         """Start ``argv`` in its own session with stdout and stderr on ``output_fd``, or on the file
-        ``log_path`` that the launcher opens itself (truncated, or appended to); a Popen-like object,
+        ``log_path`` that the launcher opens itself (truncated, or appended to; its folder made first
+        when ``log_folder`` names the root it must lie in and the root's real path); a Popen-like object,
         or None when ``ticket`` was withdrawn before the start (it may wait for a free slot)."""
 
 
@@ -187,7 +188,7 @@ class ChildProcess:
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
                  marker: str | None = None, environment: Mapping[str, str] | None = None,
                  append: bool = False, launcher: Launcher | None = None,
-                 on_sent: Callable[[], None] | None = None) -> None:
+                 on_sent: Callable[[], None] | None = None, log_folder: tuple[str, str] | None = None) -> None:
         self.argv = list(argv)
         self.log_path = log_path               # None: stdin, stdout and stderr are this process's
         self.append = append
@@ -197,6 +198,7 @@ class ChildProcess:
         self.echo = echo
         self.launcher = launcher               # None: exec argv; else the launcher forks it (built-in runner)
         self.on_sent = on_sent                 # told when the launcher has the request (see StartTicket)
+        self.log_folder = log_folder           # the launcher makes the log's folder: (root, its real path)
         self.extra_env = dict(environment or {})
         if marker is not None:
             self.extra_env[JOB_ENV] = marker
@@ -257,7 +259,8 @@ class ChildProcess:
         assert self.launcher is not None and self.log_path is not None
         if self.echo is None:                    # the launcher opens the log: no file made here
             proc = self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env, ticket=ticket,
-                                       log_path=os.path.abspath(self.log_path), append=self.append)
+                                       log_path=os.path.abspath(self.log_path), append=self.append,
+                                       log_folder=self.log_folder)
         else:
             proc = self._fork_echoing(ticket)
         self._started_at = time.time()

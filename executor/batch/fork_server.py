@@ -22,8 +22,9 @@ modules are imported by the child that needs them, and die with it, so a job tha
 changes global state or hangs cannot touch the next one.
 
 Protocol (a Unix socket pair, one message per ``sendmsg``): the runner sends ``spawn`` requests as
-JSON with the job's output file descriptor attached, or naming the job's log (``log``, ``append``),
-which the server then opens when the job starts; the server answers ``started`` (the child's pid)
+JSON with the job's output file descriptor attached, or naming the job's log (``log``, ``append``)
+and its output root (``folder``), so the server makes the job's folder and opens its log when the
+job starts (the runner's process then does no file-system work per job); the server answers ``started`` (the child's pid)
 or ``failed`` (why not), and ``exited`` with the raw wait status when the child ends. The server
 reaps its children and ends when the runner closes its end (it died or is done): it then kills
 the process groups of the children still running, so no job outlives its runner.

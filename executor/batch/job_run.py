@@ -201,7 +201,7 @@ class JobRun:
             finally:
                 self.pass_turn()              # an attempt that failed before its start passes it on
         except OSError as exc:
-            what = exc.strerror if isinstance(exc, JobFolderRefused) else \
+            what = (exc.strerror or str(exc)) if isinstance(exc, JobFolderRefused) else \
                 f"cannot start the launch command: {exc.strerror or exc}"
             result = disk_full_result(self.output_dir, started, time.time()) if disk_full(exc) else launch_failure(
                 self.output_dir, started, time.time(), what)

@@ -22,6 +22,7 @@ import click
 from cli.options import debug_option, store_option
 
 if TYPE_CHECKING:
+    from coverage_engine.coverage.diff import Side
     from coverage_engine.coverage.model import CoverageReport
 
 CONTEXT = {"help_option_names": ["-h", "--help"]}
@@ -56,7 +57,7 @@ def history_command(store_url: str | None, last: int | None, as_json: bool, debu
     return 0
 
 
-def _side(given: str, store_url: str | None, named: bool):
+def _side(given: str, store_url: str | None, named: bool) -> Side:
     """A results folder, or (digits that name no folder) a batch id of the store."""
     from coverage_engine.coverage.diff import Side, folder_outcomes
     from coverage_engine.coverage.errors import ResultsError

@@ -21,12 +21,17 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from coverage_engine.results.files import LOG_FILE, RESULT_FILE
 from coverage_engine.suffixes import OSC_SUFFIX, SCENARIO_SUFFIXES
+
+if TYPE_CHECKING:   # pytest's own types for repr_failure (not exported under a public name)
+    from _pytest._code.code import TerminalRepr, TracebackStyle
 
 #: Lines of a failing run's log shown under its message.
 LOG_TAIL_LINES = 30
@@ -75,7 +80,7 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Col
 class ScenarioFile(pytest.File):
     """A scenario file: one item, named after its scenario (``.osc``) or variant (``.sce``)."""
 
-    def collect(self):
+    def collect(self) -> Iterator[ScenarioItem]:
         yield ScenarioItem.from_parent(self, name=_item_name(self.path))
 
 
@@ -137,13 +142,14 @@ class ScenarioItem(pytest.Item):
         if outcome.returncode != 0:
             raise ScenarioFailed(_failure_message(output / RESULT_FILE, log), _tail(log))
 
-    def repr_failure(self, excinfo, style=None):
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException],
+                     style: TracebackStyle | None = None) -> str | TerminalRepr:
         if isinstance(excinfo.value, ScenarioFailed):
             failure = excinfo.value
             return f"{failure.message}\n\n--- end of the run's log ---\n{failure.log_tail}"
         return super().repr_failure(excinfo, style=style)
 
-    def reportinfo(self):
+    def reportinfo(self) -> tuple[Path, None, str]:
         return self.path, None, f"scenario {self.name}"
 
 

@@ -16,80 +16,31 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import NoReturn
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, NoReturn
 
 import click
 
+from cli.batch_options import JobsType, RepeatType, ShardType
 from cli.boundary import Boundary
 from cli.options import Seconds, debug_option, store_option
 from coverage_engine.results.files import RESULT_FILE
 from executor.batch.errors import BatchError, BatchUsageError
 from executor.output.terminal import printable
 
+if TYPE_CHECKING:
+    from executor.batch.flaky import VariantRecord
+    from executor.batch.inputs import Shard
+    from executor.batch.orchestration import BatchRequest, LocalRun
+    from executor.output.folder_lock import FolderLock
+    from store.jobs import Batch
+    from store.queue import QueueStore
+
 PROG = "scenario_batch_execution"
 CONTEXT = {"help_option_names": ["-h", "--help"]}
 
 
-def _count(kind: click.ParamType, text: str, given: object, other: str, param, ctx) -> int:
-    """``text`` as a whole number of at least 1; else the option's usage error (``other``: the other form
-    the option takes)."""
-    try:
-        number = int(text)
-    except ValueError:
-        kind.fail(f"{given!r} is neither a number nor {other}", param, ctx)
-    if number < 1:
-        kind.fail(f"{number} must be at least 1", param, ctx)
-    return number
-
-
-class JobsType(click.ParamType):
-    """``-j``: a positive number of parallel jobs, or ``auto`` for the number of CPUs this process may use."""
-
-    name = "N|auto"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, int):
-            return value
-        if str(value).lower() == "auto":
-            from executor.batch.builtin_runner import usable_cpus
-
-            return usable_cpus()
-        return _count(self, str(value), value, "'auto'", param, ctx)
-
-
-class ShardType(click.ParamType):
-    """``--shard i/N``: the i-th of N subsets, 1 <= i <= N."""
-
-    name = "i/N"
-
-    def convert(self, value, param, ctx):
-        from executor.batch.errors import BadShard
-        from executor.batch.inputs import Shard
-
-        if not isinstance(value, str):
-            return value
-        try:
-            return Shard.parse(value)
-        except BadShard as exc:
-            self.fail(str(exc).removeprefix("--shard "), param, ctx)
-
-
-class RepeatType(click.ParamType):
-    """``--repeat``: ``N`` attempts of each variant, or ``until-fail:N`` (stop a variant at its first failure);
-    converts to ``(N, until_fail)``."""
-
-    name = "N|until-fail:N"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, tuple):
-            return value
-        text = str(value).strip()
-        until_fail = text.lower().startswith("until-fail:")
-        number = text.split(":", 1)[1] if until_fail else text
-        return _count(self, number, value, "'until-fail:N'", param, ctx), until_fail
-
-
-def _check_command(command) -> None:
+def _check_command(command: Sequence[str]) -> None:
     """The launch command's form (not empty, both placeholders) is checked before anything is touched."""
     from executor.batch.errors import BadCommand
     from executor.batch.inputs import check_command
@@ -100,7 +51,7 @@ def _check_command(command) -> None:
         raise click.UsageError(str(exc)) from exc
 
 
-def _open_store(url, *, existing: bool = False):
+def _open_store(url: str | None, *, existing: bool = False) -> QueueStore:
     """The store at ``url``; ``existing``: it must exist already and is neither created nor migrated."""
     from store.queue import QueueStore
 
@@ -121,7 +72,7 @@ def _typed_options() -> list[str]:
     return given
 
 
-def _check_post_run(hooks) -> None:
+def _check_post_run(hooks: Sequence[str]) -> None:
     """Each ``--post-run`` must split into a command line (an empty one would run the job folder)."""
     from executor.children.hooks import split_hook
 
@@ -177,9 +128,11 @@ def _check_post_run(hooks) -> None:
 @store_option
 @debug_option
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
-def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retries, resume, shard, halt_on_failure,
-                ignore_return_value, post_run, enqueue_only, lease, wait, simulation, rerun_failed, only_new, repeat,
-                pass_rate, store_url, debug, command):
+def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, slots: int, timeout: float | None,
+                grace: float, retries: int, resume: bool, shard: Shard | None, halt_on_failure: bool,
+                ignore_return_value: bool, post_run: tuple[str, ...], enqueue_only: bool, lease: float, wait: bool,
+                simulation: str | None, rerun_failed: bool, only_new: bool, repeat: tuple[int, bool],
+                pass_rate: float, store_url: str | None, debug: bool, command: tuple[str, ...]) -> int:
     """Run CMD once per .sce/.osc file of the input folder; {SCENARIO} and {OUTPUT_DIR} are filled in.
 
     Without CMD the built-in runner runs each file as 'scenario_execution {SCENARIO} --output-dir
@@ -192,7 +145,41 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
     from store.jobs import BatchOptions
 
     input_dir = input_dirs[0] if input_dirs else None
+    _check_run_options(input_dir=input_dir, command=command, simulation=simulation, resume=resume,
+                       rerun_failed=rerun_failed, only_new=only_new, enqueue_only=enqueue_only, post_run=post_run)
+    request = orchestration.BatchRequest(
+        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
+        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
+                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
+                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
+                             pass_rate=pass_rate),
+        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
+    store = _open_store(store_url)
+    lock = None
+    try:
+        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
+            lock = _lock_output(request.output_dir, wait)
+        batch = _batch_to_run(store, request, output_dir, resume=resume, rerun_failed=rerun_failed,
+                              only_new=only_new, enqueue_only=enqueue_only)
+        if isinstance(batch, int):
+            return batch
+        if enqueue_only:
+            count = sum(store.counts(batch.id).values())
+            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
+                       f"'{PROG} worker --store URL' on each host")
+            return 0
+        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
+        return _report_run(store, batch, ran, shard)
+    finally:
+        store.close()
+        if lock is not None:
+            lock.release()
 
+
+def _check_run_options(*, input_dir: str | None, command: Sequence[str], simulation: str | None, resume: bool,
+                       rerun_failed: bool, only_new: bool, enqueue_only: bool, post_run: Sequence[str]) -> None:
+    """The options of a batch run that do not go together, or are missing, are usage errors before anything
+    is touched."""
     if simulation and command:
         raise click.UsageError("--simulation is for the built-in runner; with a launch command, pass it in the "
                                "command (-- scenario_execution {SCENARIO} -o {OUTPUT_DIR} --simulation ...)")
@@ -207,76 +194,69 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
     if command:                  # none: the built-in runner (scenario_execution forked, not launched)
         _check_command(command)
     _check_post_run(post_run)
-    request = orchestration.BatchRequest(
-        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
-        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
-                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
-                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
-                             pass_rate=pass_rate),
-        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
-    store = _open_store(store_url)
-    lock = None
-    try:
-        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
-            lock = _lock_output(request.output_dir, wait)
-        if rerun_failed:
-            earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
-            if rerun is None:
-                click.echo(f"every job of batch {earlier.id} passed: nothing to rerun")
-                return 0
-            click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
-                       f"pass in batch {earlier.id}")
-            batch = rerun
-        elif only_new:
-            made = orchestration.create_only_new_batch(store, request, mode="shared" if enqueue_only else "local")
-            if made.batch is None:
-                click.echo(f"nothing new: each of the {made.passed_over} scenario file(s) of -i has a verdict in "
-                           f"{output_dir} already; nothing ran")
-                return orchestration.EXIT_NOTHING_RAN
-            batch = made.batch
-            if made.earlier is not None:
-                click.echo(f"batch {batch.id}: {sum(store.counts(batch.id).values())} new scenario file(s); "
-                           f"{made.passed_over} already have a verdict in batch {made.earlier.id} (the report "
-                           "keeps theirs)")
-        elif resume:
-            batch = orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
-        else:
-            batch = orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
-        if enqueue_only:
-            count = sum(store.counts(batch.id).values())
-            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
-                       f"'{PROG} worker --store URL' on each host")
-            return 0
-        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        counts, signum = ran.counts, ran.signum
-        report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
-        _print_failures(store, batch)
-        if ran.outcome is not None:
-            from executor.batch.batch_outcome import flaky_lines
 
-            for text in flaky_lines(ran.outcome):
-                click.echo(text)
-        if ran.report_error is not None:
-            report = None
-        line = orchestration.summary_line(batch, counts, report, ran.outcome)
-        if signum is not None:
-            line += "; interrupted, finish with --resume"
-        click.echo(line)
-        if ran.disk_full is not None:
-            click.echo(f"error: no space left on the device holding {ran.disk_full}: the batch stopped; "
-                       + (f"{ran.report_error}, " if ran.report_error else "")
-                       + f"every finished result is in the store ({store.url}); make room, then run the same "
-                       "command with --resume to finish it", err=True)
-            return orchestration.EXIT_FAILED if signum is None else orchestration.exit_code(counts, signum)
-        if not sum(counts.values()) and signum is None:
-            where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
-            click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "
-                       "pytest exits when it collects no test)", err=True)
-        return orchestration.exit_code(counts, signum)
-    finally:
-        store.close()
-        if lock is not None:
-            lock.release()
+
+def _batch_to_run(store: QueueStore, request: BatchRequest, output_dir: str, *, resume: bool, rerun_failed: bool,
+                  only_new: bool, enqueue_only: bool) -> Batch | int:
+    """The batch this run works on: the reruns of the folder's failures, its new files, the unfinished batch
+    it resumes, or a new batch of the input; or the exit code when there is nothing to run (``output_dir``:
+    the output folder as the command line gave it)."""
+    from executor.batch import orchestration
+
+    if rerun_failed:
+        earlier, rerun = orchestration.rerun_failed_batch(store, request.output_dir)
+        if rerun is None:
+            click.echo(f"every job of batch {earlier.id} passed: nothing to rerun")
+            return 0
+        click.echo(f"batch {rerun.id}: rerunning {sum(store.counts(rerun.id).values())} job(s) that did not "
+                   f"pass in batch {earlier.id}")
+        return rerun
+    if only_new:
+        made = orchestration.create_only_new_batch(store, request, mode="shared" if enqueue_only else "local")
+        if made.batch is None:
+            click.echo(f"nothing new: each of the {made.passed_over} scenario file(s) of -i has a verdict in "
+                       f"{output_dir} already; nothing ran")
+            return orchestration.EXIT_NOTHING_RAN
+        if made.earlier is not None:
+            click.echo(f"batch {made.batch.id}: {sum(store.counts(made.batch.id).values())} new scenario file(s); "
+                       f"{made.passed_over} already have a verdict in batch {made.earlier.id} (the report "
+                       "keeps theirs)")
+        return made.batch
+    if resume:
+        return orchestration.resume_batch(store, request.output_dir, request.command, request, _typed_options())
+    return orchestration.create_batch(store, request, mode="shared" if enqueue_only else "local")
+
+
+def _report_run(store: QueueStore, batch: Batch, ran: LocalRun, shard: Shard | None) -> int:
+    """Print what the run of ``batch`` left (failures, flaky variants, the summary line, a full disk, an empty
+    shard) and return its exit code."""
+    from executor.batch import orchestration
+
+    counts, signum = ran.counts, ran.signum
+    report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
+    _print_failures(store, batch)
+    if ran.outcome is not None:
+        from executor.batch.batch_outcome import flaky_lines
+
+        for text in flaky_lines(ran.outcome):
+            click.echo(text)
+    if ran.report_error is not None:
+        report = None
+    line = orchestration.summary_line(batch, counts, report, ran.outcome)
+    if signum is not None:
+        line += "; interrupted, finish with --resume"
+    click.echo(line)
+    if ran.disk_full is not None:
+        click.echo(f"error: no space left on the device holding {ran.disk_full}: the batch stopped; "
+                   + (f"{ran.report_error}, " if ran.report_error else "")
+                   + f"every finished result is in the store ({store.url}); make room, then run the same "
+                   "command with --resume to finish it", err=True)
+        return orchestration.EXIT_FAILED if signum is None else orchestration.exit_code(counts, signum)
+    if not sum(counts.values()) and signum is None:
+        where = f"shard {shard.index}/{shard.count} holds" if shard is not None else "the batch has"
+        click.echo(f"warning: {where} no scenario file: nothing ran (exit {orchestration.EXIT_NOTHING_RAN}, as "
+                   "pytest exits when it collects no test)", err=True)
+    return orchestration.exit_code(counts, signum)
 
 
 @click.command(context_settings=CONTEXT)
@@ -293,7 +273,8 @@ def run_command(input_dirs, recursive, output_dir, slots, timeout, grace, retrie
               help="Seconds between looks at an empty queue.")
 @click.option("--wait", "wait_for_work", is_flag=True, help="Keep waiting for new batches (a long-lived pod).")
 @debug_option
-def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_for_work, debug):
+def worker_command(store_url: str | None, slots: int, batch_id: int | None, output_root: str | None, lease: float,
+                   poll: float, wait_for_work: bool, debug: bool) -> int:
     """Run queued jobs of the shared store until none is left."""
     from executor.batch.orchestration import EXIT_INTERRUPTED, run_worker
     from executor.batch.progress import PlainReporter
@@ -317,7 +298,7 @@ def worker_command(store_url, slots, batch_id, output_root, lease, poll, wait_fo
     return EXIT_INTERRUPTED.get(signum, 0) if signum is not None else 0
 
 
-def _pick_batch(store, batch_id):
+def _pick_batch(store: QueueStore, batch_id: int | None) -> Batch:
     if batch_id is not None:
         return store.batch(batch_id)
     batch = store.latest_batch()
@@ -334,7 +315,8 @@ def _pick_batch(store, batch_id):
                    "variants (passed and failed, in this batch's attempts or the store's earlier batches).")
 @click.option("--json", "as_json", is_flag=True, help="Print the status (and the --list) as JSON, for scripts.")
 @debug_option
-def status_command(store_url, batch_id, list_state, as_json, debug):
+def status_command(store_url: str | None, batch_id: int | None, list_state: str | None, as_json: bool,
+                   debug: bool) -> int:
     """Show jobs per state, running jobs per worker and host, and an ETA."""
     from executor.batch.failure_summary import not_passed_in_store
     from executor.batch.status import render, snapshot
@@ -379,7 +361,7 @@ def status_command(store_url, batch_id, list_state, as_json, debug):
               help="File for the merged JUnit report ('-': standard output).")
 @click.option("--json", "as_json", is_flag=True, help="Print the counts and the jobs that did not pass as JSON.")
 @debug_option
-def report_command(store_url, batch_id, output, as_json, debug):
+def report_command(store_url: str | None, batch_id: int | None, output: str, as_json: bool, debug: bool) -> int:
     """Write the merged JUnit report of a batch from the store (exit 0 only if every job passed)."""
     from executor.batch import orchestration
 
@@ -409,7 +391,7 @@ def report_command(store_url, batch_id, output, as_json, debug):
 SUBCOMMANDS = {"worker": worker_command, "status": status_command, "report": report_command}
 
 
-def _lock_output(folder: str, wait: bool):
+def _lock_output(folder: str, wait: bool) -> FolderLock:
     """Hold the output folder's lock (executor.output.folder_lock) for the run, or say who holds it."""
     from executor.output.folder_lock import FolderBusy, FolderLock
 
@@ -421,7 +403,7 @@ def _lock_output(folder: str, wait: bool):
         raise BatchError(f"cannot use the output folder {folder}: {exc.strerror or exc}") from None
 
 
-def _flaky_records(store, batch):
+def _flaky_records(store: QueueStore, batch: Batch) -> list[VariantRecord]:
     """The flaky variants of ``batch`` with their passes and failures over the store's batches up to it."""
     from executor.batch.flaky import variant_records
 
@@ -429,7 +411,7 @@ def _flaky_records(store, batch):
     return [record for record in records.values() if record.flaky]
 
 
-def _print_failures(store, batch) -> None:
+def _print_failures(store: QueueStore, batch: Batch) -> None:
     """The failures grouped by kind (the triage), then the short summary of the jobs of the folder whose
     latest verdict is not a pass (nothing when all passed)."""
     from executor.batch.failure_summary import not_passed_in_folder, summary_lines, triage

@@ -51,9 +51,10 @@ MAX_STEP_DURATION = 86400.0
               help="Record tick timing to <output-dir>/tick_timing.csv and each action call's timing to "
                    "<output-dir>/action_timing.csv (needs --output-dir).")
 @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
-def command(scenario, debug, log_model, live_tree, output_dir, dry_run, dot, step_duration,
-            scenario_parameter_file, create_template, post_run, simulation, output_result_per_scenario, bt_log,
-            tick_log):
+def command(scenario: str | None, debug: bool, log_model: bool, live_tree: bool, output_dir: str | None,
+            dry_run: bool, dot: bool, step_duration: float, scenario_parameter_file: str | None,
+            create_template: bool, post_run: tuple[str, ...], simulation: str | None,
+            output_result_per_scenario: bool, bt_log: bool, tick_log: bool) -> int:
     """Execute the scenarios of SCENARIO (an .osc or .sce file)."""
     if scenario is None:
         raise click.UsageError("missing the scenario file (an .osc or .sce file)")

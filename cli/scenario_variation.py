@@ -17,12 +17,14 @@ import click
 
 from cli.boundary import Boundary
 from cli.options import debug_option, store_option
+from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
 from coverage_engine.suffixes import OSC_SUFFIX
 from executor.variation.request import DEFAULT_MAX_VARIANTS, VariationRequest
 from executor.variation.writing import VariationStoreError
 
-#: --strategy values (coverage_engine.variation.strategies.STRATEGIES; spelled here so -h imports nothing more).
-STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
+#: --strategy values (coverage_engine.variation.strategies.STRATEGIES, spelled here so -h imports nothing more,
+#: then the adaptive strategies of --from).
+STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol", *ADAPTIVE)
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
@@ -39,8 +41,9 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
 @click.option("--max-variants", type=click.IntRange(min=1), default=DEFAULT_MAX_VARIANTS, show_default=True,
               metavar="N", help="Refuse to start when the file has more combinations than N.")
 @click.option("--strategy", type=click.Choice(STRATEGIES), default="full", show_default=True,
-              help="Which combinations: the full product, a covering array (pairwise, t-way) or a seeded "
-                   "sample (random, lhs, halton, sobol).")
+              help="Which combinations: the full product, a covering array (pairwise, t-way), a seeded "
+                   "sample (random, lhs, halton, sobol), or proposals from earlier results (boundary, fill-holes, "
+                   "falsify; with --from).")
 @click.option("--strength", type=click.IntRange(min=2), default=2, show_default=True, metavar="T",
               help="t-way: every combination of values of any T dimensions appears in some variant.")
 @click.option("--samples", type=click.IntRange(min=1, max=10_000_000), metavar="N",
@@ -53,10 +56,27 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol")
 @click.option("--only-new", is_flag=True,
               help="Add to earlier runs of the same file in the output folder: write only variants the store does "
                    "not hold yet (a sampler continues its draw, a covering array its rows).")
+@click.option("--from", "from_results", multiple=True, type=click.Path(file_okay=False), metavar="RESULTS",
+              help="Results folder of earlier runs of the same file (repeatable): boundary, fill-holes and falsify "
+                   "propose the next variants from them.")
+@click.option("--objective", metavar="NAME",
+              help="falsify: the record() item to minimise, or 'margin' (how close the compare checks came to "
+                   "flipping; the default); boundary with --threshold: the record() item that crosses it.")
+@click.option("--maximise", is_flag=True, help="falsify: maximise the objective instead of minimising it.")
+@click.option("--threshold", type=float, metavar="X",
+              help="boundary: the record() item of --objective below X counts as failing (instead of the verdict).")
+@click.option("--resolution", type=click.FloatRange(min=0, max=1, min_open=True), default=DEFAULT_RESOLUTION,
+              show_default=True, metavar="F",
+              help="boundary: locate it to this fraction of each range.")
+@click.option("--round", "round_number", type=click.IntRange(min=1), metavar="N",
+              help="The round written in each variant's proposal line (default: one more than the highest read).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())
 @click.pass_context
-def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, scenario_parameter_file, max_variants,
-            strategy, strength, samples, seed, wait, only_new):
+def command(ctx: click.Context, scenarios: tuple[str, ...], output_dir: str, debug: bool, log_model: bool,
+            list_only: bool, store_url: str | None, scenario_parameter_file: str | None, max_variants: int,
+            strategy: str, strength: int, samples: int | None, seed: int | None, wait: bool, only_new: bool,
+            from_results: tuple[str, ...], objective: str | None, maximise: bool, threshold: float | None,
+            resolution: float, round_number: int | None) -> int:
     """Generate concrete scenarios (.sce) from the values listed or ranged in each SCENARIO (.osc file, or a
     folder: its .osc files).
 
@@ -72,7 +92,9 @@ def command(ctx, scenarios, output_dir, debug, log_model, list_only, store_url, 
         request = VariationRequest(
             scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
             log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
-            strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new)
+            strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new,
+            from_results=tuple(from_results), objective=objective, maximise=maximise, threshold=threshold,
+            resolution=resolution, round_number=round_number)
         if len(files) == 1:
             return run(request)
         try:                     # several files: each is done on its own; one that fails stops only itself

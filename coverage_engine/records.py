@@ -47,7 +47,7 @@ class Record:
     def __hash__(self) -> int:
         return hash((type(self).__name__, *(getattr(self, n) for n in self._fields)))
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[Record], tuple[object, ...]]:
         return (type(self), tuple(getattr(self, n) for n in self._fields))
 
 

@@ -32,6 +32,7 @@ from typing import Any, NamedTuple
 
 from sqlalchemy import (
     Column,
+    Connection,
     Engine,
     Float,
     ForeignKey,
@@ -174,7 +175,7 @@ class CoverageRecords:
         return self.engine.url.render_as_string(hide_password=True)
 
     # ------------------------------------------------------------------ writing
-    def _schema_id(self, conn, declarations: str) -> int:
+    def _schema_id(self, conn: Connection, declarations: str) -> int:
         digest = hashlib.sha256(declarations.encode("utf-8")).hexdigest()
         known = self._schema_ids.get(digest)
         if known is not None:

@@ -97,7 +97,7 @@ _SCHEMA_LOCK_KEY = 0x5CE5C0DE
 PAGE_SIZE = 8192
 
 
-def _sqlite_pragmas(dbapi_connection, _record) -> None:  # pragma: no cover - trivial
+def _sqlite_pragmas(dbapi_connection: Any, _record: object) -> None:  # pragma: no cover - trivial
     # pysqlite's own BEGIN handling is switched off; _sqlite_begin emits BEGIN IMMEDIATE instead.
     dbapi_connection.isolation_level = None
     cursor = dbapi_connection.cursor()

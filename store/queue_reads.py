@@ -9,7 +9,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import AbstractContextManager
 from typing import Any
 
-from sqlalchemy import Connection, func, select
+from sqlalchemy import Connection, Select, func, select
 
 from store.database import StoreError
 from store.jobs import Batch, Job
@@ -51,7 +51,7 @@ class QueueReads:
         stmt = select(jobs.c.status, func.count()).group_by(jobs.c.status)
         stmt = self._scope(stmt, batch_id, shared_only)
         with self._tx() as conn:
-            found = dict(conn.execute(stmt).all())
+            found: dict[str, int] = dict(conn.execute(stmt).tuples().all())
         return {state: int(found.get(state.value, 0)) for state in JobState}
 
     def jobs(self, batch_id: int, *, results: bool = False) -> list[Job]:
@@ -110,7 +110,8 @@ class QueueReads:
         return None if value is None else float(value)
 
     @staticmethod
-    def _scope(stmt, batch_id: int | None, shared_only: bool):
+    def _scope(stmt: Select[Any], batch_id: int | None, shared_only: bool) -> Select[Any]:
+        """``stmt`` limited to one batch's jobs, or to the shared batches' jobs, or as it is."""
         if batch_id is not None:
             return stmt.where(jobs.c.batch_id == batch_id)
         if shared_only:

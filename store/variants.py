@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -33,11 +33,15 @@ from typing import Any
 from sqlalchemy import (
     Column,
     ColumnElement,
+    Connection,
+    CursorResult,
     DateTime,
     Engine,
     ForeignKey,
     Index,
+    Insert,
     Integer,
+    Row,
     String,
     Table,
     Text,
@@ -128,7 +132,7 @@ class StoredVariant:
     sce_text: str
 
     @classmethod
-    def from_row(cls, row) -> StoredVariant:
+    def from_row(cls, row: Row[Any]) -> StoredVariant:
         return cls(id=row.id, source_id=row.source_id, run_id=row.run_id, scenario=row.scenario,
                    index=row.idx, assignment=json.loads(row.assignment), content_hash=row.content_hash,
                    file_path=row.file_path, sce_text=row.sce_text)
@@ -144,7 +148,7 @@ def assignment_json(assignment: Mapping[str, object]) -> str:
     return json.dumps(dict(assignment), ensure_ascii=False, separators=(", ", ": "))
 
 
-def _upsert(engine: Engine, table: Table, index_elements: list[str], update_columns: list[str] | None):
+def _upsert(engine: Engine, table: Table, index_elements: list[str], update_columns: list[str] | None) -> Insert | None:
     """``INSERT … ON CONFLICT`` for SQLite and PostgreSQL; None for other dialects."""
     name = engine.dialect.name
     stmt: Any
@@ -164,12 +168,21 @@ def _upsert(engine: Engine, table: Table, index_elements: list[str], update_colu
                                       set_={c: getattr(stmt.excluded, c) for c in update_columns})
 
 
-def _source_id(conn, path: str, sha256: str, text: str) -> int:
+def _source_id(conn: Connection, path: str, sha256: str, text: str) -> int:
     row = conn.execute(select(source_files.c.id).where(
         and_(source_files.c.path == path, source_files.c.sha256 == sha256))).first()
     if row is not None:
         return row[0]
-    return conn.execute(insert(source_files).values(path=path, sha256=sha256, text=text)).inserted_primary_key[0]
+    return _inserted_id(conn.execute(insert(source_files).values(path=path, sha256=sha256, text=text)))
+
+
+def _inserted_id(result: CursorResult[Any]) -> int:
+    """The primary key of the one row an ``INSERT`` wrote (SQLAlchemy types it optional: it is None only
+    for an insert of several rows)."""
+    key = result.inserted_primary_key
+    if key is None:
+        raise StoreError("the store returned no id for the row just inserted")
+    return int(key[0])
 
 
 def record_variation(engine: Engine, *, source_path: str, source_sha256: str, source_text: str,
@@ -206,10 +219,10 @@ class VariationRecorder:
         self.engine, self.output_dir, self.count = engine, output_dir, 0
         with _transaction(self.engine) as conn:
             self.source_id = _source_id(conn, source_path, source_sha256, source_text)
-            self.run_id = conn.execute(insert(variation_runs).values(
+            self.run_id = _inserted_id(conn.execute(insert(variation_runs).values(
                 created_at=datetime.now(timezone.utc), options=json.dumps(dict(options), default=str),
                 source_id=self.source_id, output_dir=output_dir, skipped_count=skipped,
-                variant_count=0)).inserted_primary_key[0]
+                variant_count=0)))
             # Rows of earlier runs in this folder lose their file path batch by batch as their files are
             # overwritten, so an interrupted run leaves every path naming the variant now in the file.
             self._earlier = output_dir is not None and conn.execute(select(variants.c.id).where(and_(
@@ -235,7 +248,8 @@ class VariationRecorder:
                     conn.execute(update(variants).where(and_(
                         variants.c.file_path == bindparam("path"), variants.c.run_id != run_id)).values(
                         file_path=None), paths)
-            fast = _sqlite_executemany(conn, self._upsert) if self.engine.dialect.name == "sqlite" else None
+            fast = (_sqlite_executemany(conn, self._upsert)
+                    if self._upsert is not None and self.engine.dialect.name == "sqlite" else None)
             if fast is not None:
                 fast(batch)
             elif self._upsert is not None:
@@ -259,7 +273,7 @@ class VariationRecorder:
 
 
 @contextmanager
-def _transaction(engine: Engine) -> Iterator:
+def _transaction(engine: Engine) -> Iterator[Connection]:
     """``engine.begin()`` whose database errors become :class:`StoreError`."""
     try:
         with engine.begin() as conn:
@@ -273,7 +287,7 @@ _ROW_KEYS = ["source_id", "run_id", "scenario", "idx", "assignment", "sce_text",
              "output_dir"]
 
 
-def _sqlite_executemany(conn, upsert):
+def _sqlite_executemany(conn: Connection, upsert: Insert) -> Callable[[list[dict[str, Any]]], None] | None:
     """The upsert as one compiled SQL string run by the driver's ``executemany`` (same transaction).
 
     SQLAlchemy's per-row parameter processing costs more than SQLite's insert for 100,000 rows of
@@ -286,7 +300,7 @@ def _sqlite_executemany(conn, upsert):
     cursor = conn.connection.cursor()
     sql = str(compiled)
 
-    def run(batch: list[dict]) -> None:
+    def run(batch: list[dict[str, Any]]) -> None:
         import sqlite3
 
         try:
@@ -297,7 +311,7 @@ def _sqlite_executemany(conn, upsert):
     return run
 
 
-def _portable_upsert(conn, batch: list[dict]) -> None:  # pragma: no cover - other dialects
+def _portable_upsert(conn: Connection, batch: list[dict[str, Any]]) -> None:  # pragma: no cover - other dialects
     hashes = [row["content_hash"] for row in batch]
     known = set(conn.execute(select(variants.c.content_hash).where(variants.c.content_hash.in_(hashes))).scalars())
     fresh = [row for row in batch if row["content_hash"] not in known]

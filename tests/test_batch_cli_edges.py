@@ -115,7 +115,8 @@ def test_every_command_says_its_version(tmp_path):
     import sys
     from importlib.metadata import version
 
-    for name in ("scenario_execution", "scenario_variation", "scenario_batch_execution", "scenario_coverage"):
+    for name in ("scenario_execution", "scenario_variation", "scenario_batch_execution", "scenario_coverage",
+                 "scenario_search"):
         done = subprocess.run([str(Path(sys.executable).parent / name), "--version"], capture_output=True, text=True)
         assert done.returncode == 0 and done.stdout.strip() == f"{name} {version('scenario-coverage')}"
 

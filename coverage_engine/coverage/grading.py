@@ -14,9 +14,10 @@ import re
 import statistics
 from array import array
 from collections.abc import Hashable, Mapping
+from dataclasses import replace
 from itertools import islice
 
-from coverage_engine.coverage.buckets import Bucket
+from coverage_engine.coverage.buckets import Bucket, RangeBuckets
 from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.merge import INPUT_PREFIX, CoverageMerger, ItemCounts
 from coverage_engine.coverage.model import (
@@ -81,7 +82,7 @@ class _Buckets:
 
     def definitions(self, counts: ItemCounts, keys: list[Hashable]) -> tuple[list[Bucket], dict[Hashable, int]]:
         """The buckets of ``counts`` and the bucket of each of ``keys``."""
-        bucketing = counts.bucketing
+        bucketing = counts.plain_bucketing
         if isinstance(bucketing, InputValueBuckets):
             found = self.declared.get(counts.name[len(INPUT_PREFIX):])
             return bucketing.finish(keys, *found) if found else bucketing.finish(keys)
@@ -259,8 +260,8 @@ def _item(counts: ItemCounts, plan: CoveragePlan, make: _Buckets) -> ItemResult:
         at_least=settings.at_least, path=decl.path if decl else "", unit=decl.unit if decl else None,
         type_text=value_type.describe() if value_type else None, text=decl.text if decl else None,
         event=decl.event if decl else None, ignore=decl.ignore if decl else None,
-        range=decl.range if decl else None, every=counts.bucketing.every
-        if getattr(counts.bucketing, "kind", "") == "range" else None,
+        range=decl.range if decl else None,
+        every=counts.bucketing.every if isinstance(counts.bucketing, RangeBuckets) else None,
         samples=counts.samples, runs_sampled=counts.runs_sampled, ignored=counts.ignored, cross=grid,
         record=record, notes=tuple(notes), points=points, axis_ranges=ranges)
 
@@ -312,5 +313,8 @@ def build_report(source: RunSource, plan: CoveragePlan | None = None) -> Coverag
     finally:
         if collecting:
             gc.enable()
-    return grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
-                 root=source.root, warnings=source.warnings, domains=source.domains)
+    report = grade(merger, plan, source=source.label, complete=source.complete, notes=source.notes,
+                   root=source.root, warnings=source.warnings, domains=source.domains)
+    if source.search is not None:
+        report = replace(report, search=source.search.section(source.domains))
+    return report

@@ -21,7 +21,13 @@ from collections import Counter, defaultdict
 from collections.abc import Hashable, Mapping, Sequence
 from operator import itemgetter
 
-from coverage_engine.coverage.buckets import CrossBuckets, DistinctBuckets, bucketing_for
+from coverage_engine.coverage.buckets import (
+    Bucketing,
+    ComponentBucketing,
+    CrossBuckets,
+    DistinctBuckets,
+    bucketing_for,
+)
 from coverage_engine.coverage.input_domains import InputValueBuckets
 from coverage_engine.coverage.model import INPUT_ITEM_PREFIX
 from coverage_engine.coverage.run_records import ItemDecl
@@ -75,7 +81,8 @@ class ItemCounts:
                  "runs_sampled", "limit", "conflicts", "components", "values", "value_runs", "others",
                  "failed_here")
 
-    def __init__(self, name: str, kind: str, decl: ItemDecl | None, bucketing, components=()) -> None:
+    def __init__(self, name: str, kind: str, decl: ItemDecl | None, bucketing: Bucketing,
+                 components: Sequence[ItemCounts] = ()) -> None:
         self.name, self.kind, self.decl, self.bucketing = name, kind, decl, bucketing
         self.stats: dict[Hashable, list[int]] = {}
         self.failing: defaultdict[Hashable, list[int]] = defaultdict(list)
@@ -86,6 +93,14 @@ class ItemCounts:
         self.value_runs = array("q")       # … and the run of each
         self.others: Counter = Counter()   # record items of other types: value counts
         self.failed_here: defaultdict[Hashable, list[int]] = defaultdict(list)   # runs that failed there
+
+    @property
+    def plain_bucketing(self) -> ComponentBucketing:
+        """The bucketing of an item that is not a cross (a cross's grid is made of its components': the
+        resolver lets a cross name plain cover items only)."""
+        if isinstance(self.bucketing, CrossBuckets):
+            raise TypeError(f"coverage item {self.name} is a cross: it has no buckets of its own")
+        return self.bucketing
 
     @property
     def numeric_record(self) -> bool:
@@ -365,7 +380,7 @@ class CoverageMerger:
                 name = input_cross_name(keys[i], keys[j])
                 counts = self.items.get(name)
                 if counts is None:
-                    bucketing = CrossBuckets((items[i].bucketing, items[j].bucketing))
+                    bucketing = CrossBuckets((items[i].plain_bucketing, items[j].plain_bucketing))
                     counts = self.items[name] = ItemCounts(name, "input_cross", None, bucketing,
                                                            (items[i], items[j]))
                 crosses.append((counts, i, j))
@@ -417,4 +432,4 @@ class CoverageMerger:
             elif counts.decl is None or counts.decl.signature() != target.signature():
                 return None
             components.append(counts)
-        return ItemCounts(decl.full_name, "cross", decl, CrossBuckets([c.bucketing for c in components]), components)
+        return ItemCounts(decl.full_name, "cross", decl, CrossBuckets([c.plain_bucketing for c in components]), components)

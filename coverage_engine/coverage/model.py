@@ -12,6 +12,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.buckets import value_label
+from coverage_engine.coverage.search_rounds import SearchSection
 from coverage_engine.domains import drawn_text
 from coverage_engine.results.verdicts import FAILING
 
@@ -228,6 +229,8 @@ class CoverageReport:
     plan_file: str | None = None
     root: str | None = None
     extra: dict = field(default_factory=dict)
+    #: The rounds of a search and its estimate, when the runs are a search's (``scenario_search``).
+    search: SearchSection | None = None
 
     def items_of(self, *kinds: str) -> list[ItemResult]:
         return [item for item in self.items if item.kind in kinds]

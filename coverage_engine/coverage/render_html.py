@@ -413,6 +413,14 @@ class _Page:
                 'Each links to its folder and log; the variant name is what to rerun.</p>'
                 f'{head}{rows(shown)}</tbody></table>{more}</section>')
 
+    def search(self) -> str:
+        """The rounds of a search and its estimate (nothing for the runs of any other batch)."""
+        if self.report.search is None:
+            return ""
+        from coverage_engine.coverage.render_search import search_html
+
+        return search_html(self.report.search)
+
     # ------------------------------------------------------------------ the page
     def page(self, generated: str) -> str:
         report = self.report
@@ -426,7 +434,7 @@ class _Page:
             f'<header class="top"><h1>Scenario coverage {state}</h1>'
             f'<div class="sub">{escape(report.source)} · {len(report.runs)} run(s) · generated {escape(generated)}'
             '</div></header><main>'
-            + self.cards() + self.callouts() + history_sections(report) + self.overview() + self.item_groups() + self.records()
+            + self.cards() + self.callouts() + self.search() + history_sections(report) + self.overview() + self.item_groups() + self.records()
             + self.failing_runs()
             + '<footer>scenario_coverage · one file, no network: share it as it is.</footer></main></body></html>\n')
 

@@ -77,4 +77,8 @@ def render_json(report: CoverageReport) -> str:
     flaky = report.extra.get("flaky") or ()
     if flaky:                  # only when there are: reports without flaky variants keep their form
         data["flaky"] = [{"name": name, "detail": what} for name, what in flaky]
+    if report.search is not None:       # a search's runs only: other reports keep their form
+        from coverage_engine.coverage.render_search import search_dict
+
+        data["search"] = search_dict(report.search)
     return json.dumps(data, indent=1, ensure_ascii=False) + "\n"

@@ -326,6 +326,14 @@ def render_text(report: CoverageReport, console: Console, *, plain: bool) -> Non
     style = _Style(plain)
     console.print(Group(*_summary(report, style)))
     console.print()
+    if report.search is not None:           # right after the summary: what a search found comes first
+        from coverage_engine.coverage.render_search import search_lines
+
+        head, *rows = search_lines(report.search)
+        console.print(style.styled(head, "bold"))
+        for row in rows:
+            console.print(Text(row))
+        console.print()
     if any(i.graded for i in report.items):
         console.print(_overview(report, style))
         console.print()

@@ -26,6 +26,7 @@ from coverage_engine.coverage.errors import ResultsError, RunFileError
 from coverage_engine.coverage.merge import parse_assigned
 from coverage_engine.coverage.run_file import RunCoverage, read_run_coverage
 from coverage_engine.coverage.runs import RunInput, RunSource
+from coverage_engine.coverage.search_rounds import SearchRuns
 from coverage_engine.domains import (
     HEADER_CHARS,
     InputDomain,
@@ -43,6 +44,7 @@ from coverage_engine.results.verdicts import (
     iter_suite_verdicts,
     run_verdict,
 )
+from coverage_engine.search_record import SearchRecord, read_search_record, round_folder, round_folders
 from coverage_engine.suffixes import SCE_SUFFIX
 from coverage_engine.yaml_bounds import YamlLimitError, load_bounded
 
@@ -132,8 +134,11 @@ class _Reader:
             return None
 
     def run(self, name: str, folder: Path | None, verdict: str, reason: str | None,
-            assignment: dict[str, object], coverage: RunCoverage | None) -> RunInput:
+            assignment: dict[str, object], coverage: RunCoverage | None,
+            scenario_file: str | None = None) -> RunInput:
         log = self.file(folder, LOG_FILE) if folder is not None else None
+        if coverage is not None and coverage.run.source:
+            scenario_file = coverage.run.source
         if coverage is not None and coverage.run.assignment:
             assignment = dict(coverage.run.assignment)
             if coverage.run.source:
@@ -143,7 +148,8 @@ class _Reader:
             folder=surrogates_escaped(str(folder)) if folder is not None else None,
             log=surrogates_escaped(str(log)) if log is not None else None, assignment=assignment,
             items=coverage.items if coverage else (), samples=coverage.samples if coverage else (),
-            ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else ())
+            ignored=coverage.ignored if coverage else (), unsampled=coverage.unsampled if coverage else (),
+            scenario_file=scenario_file or None)
 
 
 class JobFolder(NamedTuple):
@@ -232,10 +238,11 @@ def _merged_batch(root: Path, report: Path, folders: dict[str, JobFolder], reade
                     found = folders.get(clean_text(job))
                     where = found.path if found is not None else None
                     coverage = reader.coverage(where) if where is not None else None
-                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage)
+                    yield reader.run(job, where, attempt_verdict, attempt_reason, assignment, coverage,
+                                     scenario_file)
                 continue
             coverage = reader.coverage(folder) if folder is not None else None
-            yield reader.run(name, folder, verdict, reason, assignment, coverage)
+            yield reader.run(name, folder, verdict, reason, assignment, coverage, scenario_file)
     except JunitUnreadable as exc:
         raise ResultsError(f"the merged report cannot be read: {exc}", Location.whole_file(str(report))) from None
     extra = [name for name in folders if name not in listed]
@@ -300,6 +307,11 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
         raise ResultsError("not a folder (give a results folder or a run's output folder)",
                            Location.whole_file(str(given)))
     root = given.resolve()
+    search = read_search_record(root)
+    if search is not None:
+        rounds = round_folders(root)
+        if rounds:
+            return _search_folder(given, search, rounds)
     reader = _Reader(root)
     source = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(root))
     source.declare(read_declared(str(root / DECLARED_FILE)))     # the batch's record; .sce headers add to it
@@ -332,7 +344,44 @@ def read_results_folder(path: str | os.PathLike[str]) -> RunSource:
             source.declare(domains)
 
     source.runs = stream()
+    if search is not None:
+        source.search = SearchRuns(search)
+        source.runs = _one_round(source.runs, source.search)
     return source
+
+
+def _one_round(runs: Iterator[RunInput], collected: SearchRuns) -> Iterator[RunInput]:
+    """The runs of one round's results folder (its ``search.json`` names the round), noted as that round's."""
+    for run in runs:
+        collected.add(run.name, run.verdict, collected.record.round, run.assignment)
+        yield run
+
+
+def _search_folder(given: Path, record: SearchRecord, rounds: list[tuple[int, Path]]) -> RunSource:
+    """The runs of a search's folder (``scenario_search -o DIR``): every round's results folder as one
+    source, each run named after its round (``round2/brake0``: the rounds name their variants alike)."""
+    parts = [(number, path, read_results_folder(path)) for number, path in rounds]    # each checked first
+    combined = RunSource(label=surrogates_escaped(str(given)), runs=iter(()), root=str(given.resolve()))
+    collected = combined.search = SearchRuns(record)
+
+    def stream() -> Iterator[RunInput]:
+        for number, path, part in parts:
+            folder = round_folder(number)
+            for run in part.runs:
+                run.name = f"{folder}/{run.name}"
+                collected.add(run.name, run.verdict, number, run.assignment)
+                yield run
+            kept = read_search_record(path)
+            if kept is not None and kept.strategy:
+                collected.name_round(number, kept.strategy)
+            combined.complete = combined.complete and part.complete
+            combined.notes.extend(f"{folder}: {note}" for note in part.notes)
+            combined.warnings.extend(part.warnings)
+            combined.declare(part.domains.values())
+        combined.notes.insert(0, f"a search of {len(parts)} round(s): {', '.join(round_folder(n) for n, _ in rounds)}")
+
+    combined.runs = stream()
+    return combined
 
 
 def _holds_jobs(folder: Path) -> bool:

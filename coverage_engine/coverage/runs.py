@@ -12,6 +12,7 @@ from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from coverage_engine.coverage.run_records import ItemDecl
+from coverage_engine.coverage.search_rounds import SearchRuns
 from coverage_engine.domains import InputDomain
 from coverage_engine.results.verdicts import Verdict
 
@@ -45,6 +46,8 @@ class RunInput:
     values: Sequence | None = None
     #: Per item, values of ``end`` items at a failure (see ``RunCoverage.unsampled``); usually empty.
     unsampled: Sequence[list] = ()
+    #: The file the run ran (a variant's ``.sce``), when known: where its round and source are read.
+    scenario_file: str | None = None
 
 
 @dataclass
@@ -60,6 +63,8 @@ class RunSource:
     #: What the variation declared per varied parameter (the ``.sce`` headers' ``# domain`` lines), by key;
     #: filled while the runs are read.
     domains: dict[str, InputDomain] = field(default_factory=dict)
+    #: The runs of a search by round (a search's folder, or one round's results), else None.
+    search: SearchRuns | None = None
 
     def declare(self, domains: Iterable[InputDomain]) -> None:
         """Add the declarations of one variation (two generations of a source add up)."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from html import escape
 
@@ -122,7 +122,8 @@ LEFT, RIGHT, TOP, BOTTOM = 48, 48, 16, 40
 PASS_COLOUR, GRADE_COLOUR, RUNS_COLOUR, CURRENT_COLOUR = "#2e9d5b", "#3b6fd4", "#d5d9e0", "#d23f3f"
 
 
-def _polyline(values: Sequence[float | None], xs: Sequence[float], y_of, colour: str, label: str) -> str:
+def _polyline(values: Sequence[float | None], xs: Sequence[float], y_of: Callable[[float], float], colour: str,
+              label: str) -> str:
     points = [f"{x:.1f},{y_of(v):.1f}" for x, v in zip(xs, values, strict=True) if v is not None]
     if not points:
         return ""

@@ -7,10 +7,11 @@ file, parses it (``coverage_engine.parse.parser``), and resolves it with optiona
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from coverage_engine.errors import OscError
+from coverage_engine.parse.syntax import CompilationUnit
 from coverage_engine.resolve.model import ScenarioFile
 from coverage_engine.suffixes import SCE_SUFFIX, SCENARIO_SUFFIXES
 
@@ -47,10 +48,11 @@ def load_scenario_file(path: str | Path, overrides: Mapping[str, object] | None 
 
 #: The last ``.osc`` parsed, by path and identity (size, modification time): the same file is loaded once
 #: per parameter document, and its syntax tree does not depend on the document.
-_last_parsed: tuple[tuple, object] | None = None
+_last_parsed: tuple[tuple[str, int, int, int], CompilationUnit] | None = None
 
 
-def _parsed(path: Path, parse_file):
+def _parsed(path: Path, parse_file: Callable[[Path], CompilationUnit]) -> CompilationUnit:
+    """The syntax tree of ``path``, parsed again only when the file changed since the last call."""
     global _last_parsed
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns, stat.st_ino)

@@ -45,6 +45,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from coverage_engine.domains import InputDomain, header_domains
 from coverage_engine.errors import SceFormatError
@@ -139,7 +140,7 @@ def is_sce_text(head: str) -> bool:
     return head.startswith(SCE_MAGIC)
 
 
-def _load_yaml(text: str, path: str):
+def _load_yaml(text: str, path: str) -> Any:
     import yaml
 
     from coverage_engine.yaml_bounds import (
@@ -229,13 +230,8 @@ def _reference_sce(path: str, line: int) -> SceFormatError:
         "'keep(... in [...])'", Location(path, line, 1))
 
 
-def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
-    """Read the text of a ``.sce`` file; ``source_dir`` is made absolute against ``path``'s folder.
-
-    Raises :class:`~coverage_engine.errors.SceFormatError` for anything malformed, an unknown format
-    version, a version 2 file without its closing line (truncated), or a ``scenario`` the model does
-    not declare.
-    """
+def _load(text: str, path: str) -> dict[str, Any]:
+    """The header mapping of a ``.sce`` text, its format version and the type of each key checked."""
     declared = _DECLARED_VERSION.match(text)
     if declared is not None and int(declared.group(1)) >= 2 and not _is_complete(text):
         raise _truncated(text, path)
@@ -258,6 +254,12 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
             f"(regenerate the file with this release's scenario_variation)", where)
     if version >= 2 and not _is_complete(text):
         raise _truncated(text, path)
+    _check_types(data, where)
+    return data
+
+
+def _check_types(data: dict[str, Any], where: Location) -> None:
+    """Each required key is present with its type; ``parameters`` and ``index``, when given, have theirs."""
     for key, kind in _REQUIRED.items():
         if key not in data:
             raise SceFormatError(f"malformed .sce file: '{key}' is missing", where)
@@ -270,6 +272,19 @@ def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
     index = data.get("index")
     if index is not None and (not isinstance(index, int) or isinstance(index, bool) or index < 0):
         raise SceFormatError(f"malformed .sce file: 'index' must be an integer, 0 or more (got {index!r})", where)
+
+
+def parse_sce(text: str, path: str = "<sce>") -> SceDocument:
+    """Read the text of a ``.sce`` file; ``source_dir`` is made absolute against ``path``'s folder.
+
+    Raises :class:`~coverage_engine.errors.SceFormatError` for anything malformed, an unknown format
+    version, a version 2 file without its closing line (truncated), or a ``scenario`` the model does
+    not declare.
+    """
+    data = _load(text, path)
+    version = data["format_version"]
+    parameters = data.get("parameters")
+    index = data.get("index")
     model = data["model"]
     scenario = data["scenario"]
     if scenario:

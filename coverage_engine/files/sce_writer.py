@@ -17,6 +17,7 @@ import re
 from array import array
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from coverage_engine.domains import InputDomain, domain_line, drawn_text
 from coverage_engine.files.sce import SCE_END, SCE_FORMAT_VERSION, SCE_MAGIC
@@ -24,15 +25,18 @@ from coverage_engine.files.sce_plain import YAML_SPECIAL
 from coverage_engine.lazy import Mapped, NumberTexts, per_choice, row_texts
 from coverage_engine.proposals import Proposal, proposal_line
 
+if TYPE_CHECKING:   # PyYAML is imported when a value first needs it
+    import yaml
+
 #: A model holding a character YAML reads specially cannot be a literal block: it is quoted instead.
 _BLOCK_UNSAFE = YAML_SPECIAL
 
 
-def _double_quoted(dumper, data: str):
+def _double_quoted(dumper: yaml.SafeDumper, data: str) -> yaml.ScalarNode:
     return dumper.represent_scalar("tag:yaml.org,2002:str", data, style='"')
 
 
-def _dumper():
+def _dumper() -> type[yaml.SafeDumper]:
     import yaml
 
     class SceDumper(yaml.SafeDumper):
@@ -42,7 +46,7 @@ def _dumper():
     return SceDumper
 
 
-_DUMPER = None
+_DUMPER: type[yaml.SafeDumper] | None = None
 
 
 def _quote(value: object) -> str:

@@ -7,14 +7,33 @@ is built. A parse failure is a :class:`ParseFailure` carrying the parser state, 
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any, Protocol
+
 from coverage_engine.parse.tables import tables
+
+
+class LexedToken(Protocol):
+    """A token as the driver and the syntax error see it: its terminal's name and its place (the lexer's
+    ``Token``, whose module imports this one for :class:`ParseFailure`, or the end-of-input token)."""
+
+    @property
+    def type(self) -> str: ...
+    @property
+    def line(self) -> int: ...
+    @property
+    def column(self) -> int: ...
+    @property
+    def start_pos(self) -> int: ...
+    @property
+    def end_pos(self) -> int: ...
 
 
 class ParseFailure(Exception):
     """Raised by the lexer or driver: ``token`` (or a bad character at ``pos``) in parser ``state``."""
 
-    def __init__(self, state: int, expected: set[str], token=None, pos: int = 0, line: int = 1,
-                 column: int = 1) -> None:
+    def __init__(self, state: int, expected: set[str], token: LexedToken | None = None, pos: int = 0,
+                 line: int = 1, column: int = 1) -> None:
         super().__init__("parse failure")
         self.state, self.expected, self.token = state, expected, token
         self.pos, self.line, self.column = pos, line, column
@@ -25,7 +44,7 @@ class _EndToken:
 
     type = "$END"
 
-    def __init__(self, last) -> None:
+    def __init__(self, last: LexedToken | None) -> None:
         self.value = ""
         self.line = getattr(last, "end_line", 1) or 1
         self.column = getattr(last, "end_column", 1) or 1
@@ -61,7 +80,18 @@ def _splice(inline: tuple[bool, ...], children: list[object]) -> _Inline:
     return spliced
 
 
-def run(tokens, builder, state_box: list[int]) -> object:
+def _rules_of(builder: object) -> list[Any]:
+    """Per rule of the table: ``builder``'s callback (None for inlined rules), goto symbol, length,
+    expand1 and inline mask; bound once per builder."""
+    rules = _bound_rules.get(id(builder))
+    if rules is None:
+        rules = _bound_rules[id(builder)] = [
+            (None if name[0] == "_" else getattr(builder, name, None), origin, size, expand1, inline)
+            for name, origin, size, expand1, inline in tables().rules]
+    return rules
+
+
+def run(tokens: Iterable[LexedToken], builder: object, state_box: list[int]) -> object:
     """Drive the LALR table over ``tokens`` calling ``builder.<rule>(children)`` on each reduction.
 
     ``state_box[0]`` always holds the current state, so the lexer can read which keywords the parser
@@ -69,12 +99,7 @@ def run(tokens, builder, state_box: list[int]) -> object:
     """
     t = tables()
     states = t.states
-    # per rule: callback (None for inlined rules), goto symbol, length, expand1, inline mask
-    rules = _bound_rules.get(id(builder))
-    if rules is None:
-        rules = _bound_rules[id(builder)] = [
-            (None if name[0] == "_" else getattr(builder, name, None), origin, size, expand1, inline)
-            for name, origin, size, expand1, inline in t.rules]
+    rules = _rules_of(builder)
     state_stack = [t.start_state]
     value_stack: list[object] = []
     state_box[0] = t.start_state

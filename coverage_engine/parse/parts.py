@@ -14,7 +14,7 @@ was built from, as a rule's location runs from the start of its first part to th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax as s
@@ -67,9 +67,10 @@ def nodes(children: Sequence[object], kind: type[T]) -> tuple[T, ...]:
     return tuple([child for child in children if isinstance(child, kind)])
 
 
-def built(children: Sequence[object]) -> tuple[object, ...]:
+def built(children: Sequence[object]) -> tuple[Any, ...]:
     """Every value a sub-rule built, in order: the children that are not tokens (``keep(expr)``'s expression
-    is ``(constraint,) = built(children)``)."""
+    is ``(constraint,) = built(children)``). Typed Any: which syntax nodes they are is the grammar's rule,
+    which the type system does not see."""
     return tuple([child for child in children if type(child) is not Token])
 
 

@@ -9,7 +9,7 @@ The parts are shared by the process, so callers hold :data:`LOCK` around a parse
 from __future__ import annotations
 
 import threading
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 from coverage_engine.parse.indenter import OscIndenter
 from coverage_engine.parse.lalr import run
@@ -17,12 +17,15 @@ from coverage_engine.parse.lexer import OscLexer
 from coverage_engine.parse.syntax import CompilationUnit
 from coverage_engine.parse.tables import tables
 
+if TYPE_CHECKING:   # imported on first use: it loads every syntax node class
+    from coverage_engine.parse.transformer import SyntaxBuilder
+
 #: Held while the shared lexer, post-lexer and builder are in use (re-entrant: error hints parse again).
 LOCK = threading.RLock()
-_PARTS: tuple | None = None
+_PARTS: tuple[OscLexer, OscIndenter, SyntaxBuilder] | None = None
 
 
-def _parts():
+def _parts() -> tuple[OscLexer, OscIndenter, SyntaxBuilder]:
     """The per-process lexer, post-lexer and builder (created on first use)."""
     global _PARTS
     if _PARTS is None:

@@ -9,6 +9,7 @@ tested in ``tests/test_parser_errors.py``).
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 
 from coverage_engine.errors import OscError, OscSyntaxError
 from coverage_engine.location import Location
@@ -96,7 +97,7 @@ def describe_terminal(name: str) -> str:
     return f"'{word}'" if word is not None else name.lower()
 
 
-def _describe_token(token) -> str:
+def _describe_token(token: object) -> str:
     kind = getattr(token, "type", "")
     if kind == "_INDENT":
         return "indentation"
@@ -112,7 +113,7 @@ def _is_terminal(name: str) -> bool:
     return name == "$END" or name.lstrip("_")[:1].isupper()
 
 
-def _expected(names) -> str:
+def _expected(names: Iterable[str]) -> str:
     names = [n for n in names if _is_terminal(n)]
     words = sorted({describe_terminal(n) for n in names if n != "$END"} |
                    ({"end of file"} if "$END" in names else set()))

@@ -9,7 +9,8 @@ Unary minus written directly before a number literal is folded into it (``-2.0ra
 from __future__ import annotations
 
 import re
-from typing import cast
+from collections.abc import Sequence
+from typing import Any, NoReturn, Protocol, cast
 
 from coverage_engine.errors import OscSyntaxError, UnsupportedFeatureError
 from coverage_engine.location import Location
@@ -47,8 +48,24 @@ BINARY_PRECEDENCE = {
 PREFIX_PRECEDENCE = {"not": 4, "-": 8, "+": 8}
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
+#: What a rule's callback receives: the rule's tokens and the values its sub-rules built (syntax nodes and
+#: the records of :mod:`~coverage_engine.parse.parts`), in written order. The table-driven parser does not
+#: type them; :mod:`~coverage_engine.parse.parts` finds each by name or class.
+Children = list[Any]
 
-def _start(x):
+
+class Located(Protocol):
+    """A syntax node or a part record: anything with a location."""
+
+    @property
+    def location(self) -> Location: ...
+
+
+#: What a location can be taken from: a token, a node, a location, or a run of them (first and last count).
+Spanned = Token | Location | Located | tuple[Any, ...] | list[Any]
+
+
+def _start(x: Spanned) -> tuple[int, int, int]:
     """(line, column, offset) where ``x`` (token, node, or tuple of nodes) begins."""
     if isinstance(x, Token):
         return x.line, x.column, x.start_pos
@@ -58,7 +75,7 @@ def _start(x):
     return loc.line, loc.column, loc.start_pos
 
 
-def _end(x):
+def _end(x: Spanned) -> tuple[int, int, int]:
     """(line, column, offset) just after ``x``."""
     if isinstance(x, Token):
         return x.end_line, x.end_column, x.end_pos
@@ -82,7 +99,7 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ helpers
 
-    def loc(self, children) -> Location:
+    def loc(self, children: Sequence[Any]) -> Location:
         items = [c for c in children if c is not None and not (isinstance(c, tuple) and not c)]
         if not items:
             return Location(self.file, 1, 1, 1, 1, 0, 0)
@@ -94,7 +111,7 @@ class BehaviorExpressionRules:
         return Location(self.file, tok.line, tok.column, tok.end_line, tok.end_column,
                           tok.start_pos, tok.end_pos)
 
-    def span(self, first, last) -> Location:
+    def span(self, first: Spanned, last: Spanned) -> Location:
         line, column, start = _start(first)
         end_line, end_column, end = _end(last)
         return Location(self.file, line, column, end_line, end_column, start, end)
@@ -104,7 +121,7 @@ class BehaviorExpressionRules:
             self._lines = _LINE_BREAK.split(self.text)
         return self._lines[line - 1] if 0 < line <= len(self._lines) else None
 
-    def unsupported(self, what: str, where) -> UnsupportedFeatureError:
+    def unsupported(self, what: str, where: Token | Location) -> UnsupportedFeatureError:
         loc = self.tloc(where) if isinstance(where, Token) else where
         return UnsupportedFeatureError(f"not supported: {what}", loc, self.source_line(loc.line))
 
@@ -121,31 +138,31 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ behaviours
 
-    def labelled(self, children):
+    def labelled(self, children: Children) -> s.Behavior:
         (behavior,) = built(children)
         return replace(behavior, label=self.name(token(children, "NAME")), location=self.loc(children))
 
-    def composite(self, children):
+    def composite(self, children: Children) -> s.Composite:
         kind = token(children, "SERIAL", "PARALLEL", "ONE_OF")
         with_block = maybe_node(children, WithBlock)
         members = tuple(c for c in built(children) if not isinstance(c, (ArgumentList, WithBlock)))
         return s.Composite(str(kind), None, members, arguments_of(children),
                            with_block.members if with_block else (), self.loc(children))
 
-    def composite_args(self, children):
+    def composite_args(self, children: Children) -> ArgumentList:
         return ArgumentList(arguments_of(children))
 
-    def invocation(self, children):
+    def invocation(self, children: Children) -> s.Invocation:
         name, _open, *inside, _close, end = children
         self.check_call_name(name)
         with_members = end.members if type(end) is WithBlock else ()
         return s.Invocation(None, name, arguments_of(inside), with_members, self.loc(children))
 
-    def wait(self, children):
+    def wait(self, children: Children) -> s.Wait:
         (condition,) = built(children)
         return s.Wait(None, condition, self.loc(children))
 
-    def wait_condition(self, children):
+    def wait_condition(self, children: Children) -> s.Expression:
         if len(children) == 1:
             (condition,) = children
             return condition
@@ -155,19 +172,19 @@ class BehaviorExpressionRules:
         (condition,) = children
         return condition
 
-    def event_as(self, children):
+    def event_as(self, children: Children) -> Refusal:
         return Refusal("event field declarations (as ...)", self.loc(children))
 
-    def event_if(self, children):
+    def event_if(self, children: Children) -> Refusal:
         return Refusal("event conditions (if ...)", self.loc(children))
 
-    def emit(self, children):
+    def emit(self, children: Children) -> s.Emit:
         return s.Emit(None, self.name(token(children, "NAME")), arguments_of(children), self.loc(children))
 
-    def emit_args(self, children):
+    def emit_args(self, children: Children) -> ArgumentList:
         return ArgumentList(arguments_of(children))
 
-    def call(self, children):
+    def call(self, children: Children) -> s.CallDirective:
         (expr,) = built(children)
         if not isinstance(expr, s.Call):
             loc = expr.location
@@ -177,7 +194,7 @@ class BehaviorExpressionRules:
 
     # ------------------------------------------------------------------ arguments
 
-    def arguments(self, children):
+    def arguments(self, children: Children) -> ArgumentList:
         args = nodes(children, s.Argument)
         seen_named = False
         for arg in args:
@@ -189,17 +206,17 @@ class BehaviorExpressionRules:
                                      "write positional arguments first, then the named ones")
         return ArgumentList(args)
 
-    def named_argument(self, children):
+    def named_argument(self, children: Children) -> s.Argument:
         name, _colon, value = children
         return s.Argument(self.name(name), value, self.loc(children))
 
-    def positional_argument(self, children):
+    def positional_argument(self, children: Children) -> s.Argument:
         (value,) = children
         return s.Argument(None, value, self.loc(children))
 
     # ------------------------------------------------------------------ expressions
 
-    def expr(self, children):
+    def expr(self, children: Children) -> s.Expression:
         """A run ``operand (operator operand)*``, with prefix operators, then an optional ``? then : else``."""
         if len(children) == 1:
             (only,) = children
@@ -211,13 +228,13 @@ class BehaviorExpressionRules:
                 return s.Ternary(condition, then, otherwise, self.span(condition, otherwise))
         return self._climb(children)
 
-    def _climb(self, items):
+    def _climb(self, items: Children) -> s.Expression:
         if len(items) == 1:
             return items[0]
         tree, _ = self._climb_from(items, 0, 0)
         return tree
 
-    def _climb_from(self, items, pos, min_prec):
+    def _climb_from(self, items: Children, pos: int, min_prec: int) -> tuple[s.Expression, int]:
         first = items[pos]
         if isinstance(first, Token):  # prefix operator
             operand, pos = self._climb_from(items, pos + 1, PREFIX_PRECEDENCE[str(first)])
@@ -233,7 +250,7 @@ class BehaviorExpressionRules:
             left = s.BinaryOp(str(op), left, right, self.span(left, right))
         return left, pos
 
-    def _unary(self, op: Token, operand):
+    def _unary(self, op: Token, operand: s.Expression) -> s.Expression:
         loc = self.span(op, operand)
         adjacent = operand.location.start_pos == op.end_pos
         if op.value == "+":
@@ -247,17 +264,17 @@ class BehaviorExpressionRules:
                 return s.PhysicalLiteral(-operand.number, operand.unit, loc)
         return s.UnaryOp(str(op), operand, loc)
 
-    def paren(self, children):
+    def paren(self, children: Children) -> s.Expression:
         _open, inner, _close = children
         return inner
 
-    def member(self, children):
+    def member(self, children: Children) -> s.EventRef | s.MemberAccess:
         target, _dot, name = children
         if isinstance(target, s.EventRef):  # @actor.event: one event path, not a field access
             return s.EventRef(target.path + (self.name(name),), self.loc(children))
         return s.MemberAccess(target, self.name(name), self.loc(children))
 
-    def call_expr(self, children):
+    def call_expr(self, children: Children) -> s.Call:
         callee, _open, *inside, _close = children
         if isinstance(callee, s.MemberAccess) and callee.member in ("as", "is"):
             what = "type casts" if callee.member == "as" else "type tests"
@@ -266,60 +283,60 @@ class BehaviorExpressionRules:
             raise self.unsupported(UNSUPPORTED_EXPR_CALLS[callee.name], callee.location)
         return s.Call(callee, arguments_of(inside), self.loc(children))
 
-    def element_access(self, children):
+    def element_access(self, children: Children) -> NoReturn:
         raise self.unsupported("element access (list[index])", self.loc(children))
 
-    def int_lit(self, children):
+    def int_lit(self, children: Children) -> s.Literal:
         (tok,) = children
         return s.Literal("int", int(str(tok)), self.tloc(tok))
 
-    def hex_lit(self, children):
+    def hex_lit(self, children: Children) -> s.Literal:
         (tok,) = children
         return s.Literal("int", int(str(tok), 16), self.tloc(tok))
 
-    def float_lit(self, children):
+    def float_lit(self, children: Children) -> s.Literal:
         (tok,) = children
         return s.Literal("float", float(str(tok)), self.tloc(tok))
 
-    def string_lit(self, children):
+    def string_lit(self, children: Children) -> s.Literal:
         (tok,) = children
         return s.Literal("string", unescape_string(str(tok)), self.tloc(tok))
 
-    def bool_lit(self, children):
+    def bool_lit(self, children: Children) -> s.Literal:
         (tok,) = children
         return s.Literal("bool", tok.type == "TRUE", self.tloc(tok))
 
-    def physical(self, children):
+    def physical(self, children: Children) -> s.PhysicalLiteral:
         number, unit = children
         value: int | float = float(str(number)) if number.type == "FLOAT" else int(str(number))
         return s.PhysicalLiteral(value, self.name(unit), self.loc(children))
 
-    def identifier(self, children):
+    def identifier(self, children: Children) -> s.Identifier:
         (tok,) = children
         return s.Identifier(self.name(tok), self.tloc(tok))
 
-    def list_expr(self, children):
+    def list_expr(self, children: Children) -> s.ListExpr:
         return s.ListExpr(built(children), self.loc(children))
 
-    def range_expr(self, children):
+    def range_expr(self, children: Children) -> s.RangeExpr:
         _open, low, _dots, high, _close = children
         return s.RangeExpr(low, high, self.loc(children))
 
-    def range_expr_unit(self, children):
+    def range_expr_unit(self, children: Children) -> s.RangeExpr:
         """Foretify's ``[10..50]kph``: the unit after the bracket applies to both (plain number) ends."""
         _open, low, _dots, high, _close, unit = children
         name = self.name(unit)
         return s.RangeExpr(_with_unit(low, name), _with_unit(high, name), self.loc(children))
 
-    def enum_ref(self, children):
+    def enum_ref(self, children: Children) -> s.EnumValueRef:
         type_name, _bang, member = children
         return s.EnumValueRef(self.name(type_name), self.name(member), self.loc(children))
 
-    def enum_ref_bare(self, children):
+    def enum_ref_bare(self, children: Children) -> s.EnumValueRef:
         _bang, member = children
         return s.EnumValueRef(None, self.name(member), self.loc(children))
 
-    def event_ref(self, children):
+    def event_ref(self, children: Children) -> s.EventRef:
         _at, name = children
         return s.EventRef((self.name(name),), self.loc(children))
 

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from coverage_engine.errors import ResolveError
 from coverage_engine.parse import syntax
+from coverage_engine.resolve.external_methods import external_method
+from coverage_engine.resolve.instances import field_value, instantiate
 from coverage_engine.resolve.scope import ResolveContext, Scope
 from coverage_engine.resolve.types import CompoundType
-from coverage_engine.resolve.values import external_method, field_value, instantiate
 
 #: Parameter names the runtime gives every action itself; a declared action may not use them.
 RESERVED_ACTION_PARAMETERS = ("name", "associated_actor")

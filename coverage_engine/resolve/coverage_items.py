@@ -22,10 +22,10 @@ from coverage_engine.errors import NameLookupError, OscTypeError, ResolveError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
+from coverage_engine.resolve.expressions import resolve_expression
 from coverage_engine.resolve.operations import coerce
 from coverage_engine.resolve.scope import Scope, TypedExpr
 from coverage_engine.resolve.types import BOOL, FLOAT, INT, STRING, UINT, CompoundType, EnumType, PhysicalType
-from coverage_engine.resolve.values import resolve_expression
 
 #: Named arguments each kind accepts.
 _COVER_ARGUMENTS = ("name", "expression", "unit", "range", "every", "event", "text", "ignore", "items")

@@ -8,6 +8,7 @@ block apply to that composite or invocation; several nest in the order written, 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import cast
 
 from coverage_engine.errors import (
@@ -20,11 +21,20 @@ from coverage_engine.errors import (
 from coverage_engine.parse import syntax
 from coverage_engine.records import replace
 from coverage_engine.resolve import model
+from coverage_engine.resolve.expressions import resolve_expression
+from coverage_engine.resolve.instances import apply_nested_keeps, instantiate
 from coverage_engine.resolve.keeps import KeepCheck, check_keep, classify_keep
 from coverage_engine.resolve.operations import bind_arguments, coerce, struct_value
 from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
-from coverage_engine.resolve.types import ANY, BOOL, CompoundType, ListType, PhysicalType, is_numeric
-from coverage_engine.resolve.values import apply_nested_keeps, instantiate, resolve_expression
+from coverage_engine.resolve.types import (
+    ANY,
+    BOOL,
+    CompoundType,
+    FieldDecl,
+    ListType,
+    PhysicalType,
+    is_numeric,
+)
 
 
 def resolve_behavior(node: syntax.Behavior, scope: Scope) -> model.Behavior:
@@ -161,10 +171,44 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
     action, actor = _find_action(node, scope)
     what = f"action '{action.name}'"
     bound = bind_arguments(list(action.fields), node.arguments, what, node.location)
-    keeps = {}
+    members = _with_members(node, action, bound, scope, what)
+    arguments: list[tuple[str, model.Expr]] = []
+    values: dict[str, TypedExpr] = {}
+    for name, fdecl in action.fields.items():
+        value = _argument(name, fdecl, bound, members, node, scope, what)
+        arguments.append((name, value.expr))
+        values[name] = value
+    if members.conditions:
+        instance = struct_value(action, values)
+        for condition in members.conditions:
+            check_keep(condition, {}, instance, resolve_expression)
+    plugin_names = tuple(t.name for t in action.ancestry())
+    call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
+                            node.location, node.label is not None)
+    return apply_until(apply_modifiers(call, members.modifiers, scope), members.untils, scope)
+
+
+@dataclass(frozen=True)
+class _WithMembers:
+    """An invocation's ``with:`` block sorted by what each member does to the action call."""
+
+    #: ``keep(it.speed == 1mps)``: the value of a parameter, by its name.
+    keeps: dict[str, KeepValue]
+    #: ``keep(it.pose.position.x == 1m)``: part of a struct parameter (paths below the parameter).
+    nested: dict[str, list[KeepValue]]
+    modifiers: list[syntax.ModifierInvocation]
+    untils: list[syntax.Until]
+    #: ``keep(it.speed > 1mps)``: checked once the arguments are known.
+    conditions: list[KeepCheck]
+
+
+def _with_members(node: syntax.Invocation, action: CompoundType, bound: dict[str, syntax.Argument], scope: Scope,
+                  what: str) -> _WithMembers:
+    """Sort ``node``'s ``with:`` members; a keep naming no parameter, or one already given, is an error."""
+    keeps: dict[str, KeepValue] = {}
     nested: dict[str, list[KeepValue]] = {}
     modifiers: list[syntax.ModifierInvocation] = []
-    untils = []
+    untils: list[syntax.Until] = []
     conditions: list[KeepCheck] = []
     for member in node.with_members:
         if isinstance(member, syntax.ModifierInvocation):
@@ -176,13 +220,12 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
             untils.append(member)
             continue
         found = classify_keep(member, scope)
-        if isinstance(found, KeepCheck):       # keep(it.speed > 1mps): checked once the arguments are known
+        if isinstance(found, KeepCheck):
             conditions.append(found)
             continue
         keep = found
         if len(keep.path) > 1 and keep.path[0] in action.fields \
                 and isinstance(action.fields[keep.path[0]].type, CompoundType):
-            # keep(it.pose.position.x == 1m): a member of a struct parameter, merged into its value below
             nested.setdefault(keep.path[0], []).append(replace(keep, path=keep.path[1:]))
             continue
         if len(keep.path) != 1 or keep.path[0] not in action.fields:
@@ -193,39 +236,34 @@ def _invocation(node: syntax.Invocation, scope: Scope) -> model.Behavior:
         if keep.path[0] in bound or keep.path[0] in keeps:
             raise ArgumentError(f"{what}: parameter '{keep.path[0]}' is given twice", member.location)
         keeps[keep.path[0]] = keep
-    arguments: list[tuple[str, model.Expr]] = []
-    values: dict[str, TypedExpr] = {}
-    for name, fdecl in action.fields.items():
-        if name in bound:
-            arg = bound[name]
-            value = coerce(resolve_expression(arg.value, scope, fdecl.type), fdecl.type, arg.location,
-                           f"{what}, argument '{name}'", lenient_string=True)
-        elif name in keeps:
-            keep = keeps[name]
-            value = coerce(resolve_expression(keep.value, scope, fdecl.type), fdecl.type, keep.location,
-                           f"{what}, parameter '{name}'", lenient_string=True, unit_required=True)
-        elif fdecl.default is not None:
-            value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
-                           fdecl.location, f"{what}, parameter '{name}'", unit_required=True)
-        elif name in nested and isinstance(fdecl.type, CompoundType):
-            value = instantiate(scope.ctx, fdecl.type, {}, [], scope.ctx.fresh_path(name), node.location)
-        elif isinstance(fdecl.type, ListType):
-            # a list left out is empty, as the reference passes it (ros_launch(...) without its arguments)
-            value = TypedExpr(model.Const([]), fdecl.type, True)
-        else:
-            raise ArgumentError(f"{what}: missing argument '{name}'", node.location)
-        if name in nested:        # partial overrides merged into the value given, kept or defaulted
-            value = apply_nested_keeps(scope.ctx, value, nested[name], name, node.location)
-        arguments.append((name, value.expr))
-        values[name] = value
-    if conditions:
-        instance = struct_value(action, values)
-        for condition in conditions:
-            check_keep(condition, {}, instance, resolve_expression)
-    plugin_names = tuple(t.name for t in action.ancestry())
-    call = model.ActionCall(action.name, plugin_names, node.label or node.name.parts[-1], tuple(arguments), actor,
-                            node.location, node.label is not None)
-    return apply_until(apply_modifiers(call, modifiers, scope), untils, scope)
+    return _WithMembers(keeps, nested, modifiers, untils, conditions)
+
+
+def _argument(name: str, fdecl: FieldDecl, bound: dict[str, syntax.Argument], members: _WithMembers,
+              node: syntax.Invocation, scope: Scope, what: str) -> TypedExpr:
+    """The value of parameter ``name`` of the action call: the argument given, else its keep, else its
+    default (an empty list for a list), with the keeps on its members merged in."""
+    if name in bound:
+        arg = bound[name]
+        value = coerce(resolve_expression(arg.value, scope, fdecl.type), fdecl.type, arg.location,
+                       f"{what}, argument '{name}'", lenient_string=True)
+    elif name in members.keeps:
+        keep = members.keeps[name]
+        value = coerce(resolve_expression(keep.value, scope, fdecl.type), fdecl.type, keep.location,
+                       f"{what}, parameter '{name}'", lenient_string=True, unit_required=True)
+    elif fdecl.default is not None:
+        value = coerce(resolve_expression(fdecl.default, Scope(scope.ctx), fdecl.type), fdecl.type,
+                       fdecl.location, f"{what}, parameter '{name}'", unit_required=True)
+    elif name in members.nested and isinstance(fdecl.type, CompoundType):
+        value = instantiate(scope.ctx, fdecl.type, {}, [], scope.ctx.fresh_path(name), node.location)
+    elif isinstance(fdecl.type, ListType):
+        # a list left out is empty, as the reference passes it (ros_launch(...) without its arguments)
+        value = TypedExpr(model.Const([]), fdecl.type, True)
+    else:
+        raise ArgumentError(f"{what}: missing argument '{name}'", node.location)
+    if name in members.nested:        # partial overrides merged into the value given, kept or defaulted
+        value = apply_nested_keeps(scope.ctx, value, members.nested[name], name, node.location)
+    return value
 
 
 def _wait(node: syntax.Wait, scope: Scope) -> model.Behavior:

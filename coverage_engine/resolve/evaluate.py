@@ -11,7 +11,7 @@ from __future__ import annotations
 import importlib
 import operator
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any, cast
 
@@ -65,7 +65,7 @@ def apply_operator(op: str, values: list) -> Any:
 _function_cache: dict[tuple[str, str], Callable] = {}
 
 
-def add_import_paths(paths) -> None:
+def add_import_paths(paths: Iterable[str | Path]) -> None:
     """Make user modules importable from these folders (working directory, scenario directory)."""
     for path in paths:
         text = str(Path(path).resolve())

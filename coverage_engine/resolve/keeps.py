@@ -9,14 +9,13 @@ concrete scenarios first; when a scenario runs it is an error.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from coverage_engine.errors import ResolveError, UnsupportedFeatureError
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
-from coverage_engine.resolve.scope import KeepValue, Scope, TypedExpr
-from coverage_engine.resolve.types import BOOL, STRING, CompoundType, OscType
+from coverage_engine.resolve.scope import KeepValue, ResolveExpression, Scope, TypedExpr
+from coverage_engine.resolve.types import BOOL, STRING, CompoundType
 
 #: Operators whose keep is a condition (``==`` on a member path is a value, ``in`` a variation).
 _CONDITIONS = frozenset({"!=", "<", "<=", ">", ">=", "and", "or", "=>"})
@@ -108,10 +107,6 @@ def split_with_keeps(with_members: tuple, scope: Scope) -> tuple[list[KeepValue]
     return values, checks
 
 
-#: ``resolve_expression`` of :mod:`coverage_engine.resolve.values` (passed in: values imports this module).
-ResolveExpression = Callable[[syntax.Expression, Scope, "OscType | None"], TypedExpr]
-
-
 def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | None,
                resolve_expression: ResolveExpression) -> None:
     """Check ``check`` with ``names`` (the members) and ``it`` in view; raise when it does not hold.
@@ -139,7 +134,7 @@ def check_keep(check: KeepCheck, names: dict[str, TypedExpr], it: TypedExpr | No
         raise ConstraintViolation(f"constraint does not hold: keep({keep_text(check)})", check.location)
 
 
-def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve) -> None:
+def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve: ResolveExpression) -> None:
     """A keep condition orders numbers and physical quantities only: ``keep(it.z <= "x")`` is refused.
 
     Ordering strings is legal in an expression, but in a constraint it is almost always a mistyped
@@ -149,7 +144,7 @@ def _refuse_string_order(expr: syntax.Expression, scope: Scope, resolve) -> None
         _refuse_string_order(expr.operand, scope, resolve)
     elif isinstance(expr, syntax.BinaryOp):
         if expr.op in ("<", "<=", ">", ">="):
-            if resolve(expr.left, scope).type is STRING:
+            if resolve(expr.left, scope, None).type is STRING:
                 raise ResolveError(f"a keep condition cannot order strings with '{expr.op}' (it compares numbers "
                                    "and physical quantities); to fix a value write 'keep(it.member == value)'",
                                    expr.location)

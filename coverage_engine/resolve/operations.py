@@ -7,7 +7,7 @@ type with the resulting SI exponents (``speed * time`` is a ``length``); compari
 on constants are folded here (with the run-time evaluator's own operator table), so the model carries
 :class:`~coverage_engine.resolve.model.Const` wherever a value is known before the run.
 
-Nothing here resolves syntax: these are the rules :mod:`~coverage_engine.resolve.values` applies to
+Nothing here resolves syntax: these are the rules :mod:`~coverage_engine.resolve.expressions` applies to
 values it has already resolved.
 """
 

@@ -13,9 +13,9 @@ from collections.abc import Mapping
 from coverage_engine.errors import ParameterFileError
 from coverage_engine.parse import syntax
 from coverage_engine.resolve import model
+from coverage_engine.resolve.instances import FieldInfo, OverrideHook, instantiate
 from coverage_engine.resolve.scope import ResolveContext, TypedExpr
 from coverage_engine.resolve.types import CompoundType, ConversionError, ListType, OscType, convert
-from coverage_engine.resolve.values import FieldInfo, OverrideHook, instantiate
 
 #: The key of a parameter document's scenario mapping that places that run's results (``_output_dir:
 #: fast_run``): read by the runner, never a parameter of the scenario.
@@ -89,7 +89,7 @@ def _contains_actor(t: OscType) -> bool:
 
 
 def override_hook(ctx: ResolveContext, scenario: str, values: Mapping) -> OverrideHook:
-    """The hook :func:`~coverage_engine.resolve.values.instantiate` calls for each member of ``scenario``."""
+    """The hook :func:`~coverage_engine.resolve.instances.instantiate` calls for each member of ``scenario``."""
     unused = set(values)
 
     def hook(name: str, current: TypedExpr | None, info: FieldInfo) -> TypedExpr | None:

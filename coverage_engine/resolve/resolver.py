@@ -18,12 +18,13 @@ from coverage_engine.resolve import model
 from coverage_engine.resolve.checks import check_declarations
 from coverage_engine.resolve.coverage_items import resolve_coverage
 from coverage_engine.resolve.do_body import apply_modifiers, resolve_behavior
+from coverage_engine.resolve.expressions import resolve_expression
 from coverage_engine.resolve.imports import collect_units
+from coverage_engine.resolve.instances import FieldInfo, global_value, instantiate
 from coverage_engine.resolve.namespace import Namespace, build_namespace
 from coverage_engine.resolve.overrides import check_document, not_overridable_reason, override_hook
 from coverage_engine.resolve.scope import ResolveContext, Scope, TypedExpr
-from coverage_engine.resolve.types import CompoundType
-from coverage_engine.resolve.values import FieldInfo, global_value, instantiate
+from coverage_engine.resolve.types import CompoundType, FieldDecl
 
 
 def resolve(unit: syntax.CompilationUnit, base_dir: Path | str | None = None,
@@ -76,7 +77,7 @@ def _prepared(unit: syntax.CompilationUnit, base: Path) -> tuple[list[syntax.Com
 def _resolve(unit: syntax.CompilationUnit, units: list[syntax.CompilationUnit], base: Path,
              overrides: Mapping | None, namespace: Namespace, constraints: str = "check",
              collected: list[tuple[Location, bool]] | None = None) -> model.ScenarioFile:
-    ctx = ResolveContext(namespace)
+    ctx = ResolveContext(namespace, resolve_expression)
     ctx.constraints = constraints
     if collected is not None:
         ctx.constraint_results = collected
@@ -132,5 +133,5 @@ def _scenario(ctx: ResolveContext, stype: CompoundType, values: Mapping | None) 
                           tuple(events.values()), body, location, coverage)
 
 
-def _info(fdecl) -> FieldInfo:
+def _info(fdecl: FieldDecl) -> FieldInfo:
     return FieldInfo(fdecl.name, fdecl.type, fdecl.default, True, fdecl.location)

@@ -7,6 +7,8 @@ parent and finally to the globals of the :class:`ResolveContext`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from coverage_engine.location import Location
 from coverage_engine.parse import syntax
 from coverage_engine.records import Record, record
@@ -60,12 +62,23 @@ class Scope:
         return Scope(self.ctx, names if names is not None else {}, it, self, self.events)  # events are read-only
 
 
+#: Resolves one expression in a scope (``expected`` guides ``!member`` and list literals):
+#: :func:`coverage_engine.resolve.expressions.resolve_expression`.
+ResolveExpression = Callable[[syntax.Expression, Scope, "OscType | None"], TypedExpr]
+
+
 class ResolveContext:
     """State of one resolution: the namespace, global values computed so far and the variables
-    created for the scenario being resolved."""
+    created for the scenario being resolved.
 
-    def __init__(self, namespace: Namespace) -> None:
+    It also carries the expression resolver, ``resolve_expression``: building an instance, calling an
+    external method and checking a keep each resolve expressions, and the expression resolver calls
+    each of them, so they receive it here instead of importing it (which would close an import circle).
+    """
+
+    def __init__(self, namespace: Namespace, resolve_expression: ResolveExpression) -> None:
         self.namespace = namespace
+        self.resolve_expression = resolve_expression
         self.global_values: dict[str, TypedExpr] = {}
         self.globals_in_progress: list[str] = []
         self.variables: list[model.Variable] = []

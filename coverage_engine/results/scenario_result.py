@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+#: The JUnit property of a run holding how close its closest ``compare`` came to flipping (relative: the
+#: difference over the larger magnitude; negative when a check failed), what ``--objective margin`` reads.
+CHECK_MARGIN_PROPERTY = "check.margin"
+
 
 class ScenarioResult:
     """``passed`` or not; on failure a one-line ``message`` and ``output`` (the last tree snapshot).
@@ -29,7 +33,7 @@ class ScenarioResult:
         self.aborted = aborted
         self.skipped = skipped
         self.error = error
-        #: JUnit properties of the run (one per coverage item sampled), added to its suite's.
+        #: JUnit properties of the run (one per coverage item sampled, and its check margin), added to its suite's.
         self.properties: dict[str, str] = {}
 
     def __repr__(self) -> str:

@@ -27,7 +27,7 @@ from __future__ import annotations
 __all__ = ["plan_variation"]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     if name == "plan_variation":  # imported lazily: the command starts without the resolver
         from coverage_engine.variation.choice import plan_variation
 

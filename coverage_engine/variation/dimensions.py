@@ -24,7 +24,7 @@ the cartesian product it varies slowest.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -295,7 +295,7 @@ def invocation_steps(behavior: object) -> list[tuple[str, s.Invocation]]:
     return steps
 
 
-def _keeps(members) -> Iterator[s.KeepConstraint]:
+def _keeps(members: Iterable[object]) -> Iterator[s.KeepConstraint]:
     return (m for m in members if isinstance(m, s.KeepConstraint))
 
 

@@ -30,6 +30,7 @@ import os
 import signal
 import struct
 import sys
+from types import TracebackType
 
 _HEADER = struct.Struct("!IIB")     # path length, data length, 1 = replaces an existing file
 #: ``O_NOFOLLOW``: a symbolic link planted under a temporary name is never written through.
@@ -220,7 +221,8 @@ class FileWriter:
         except OSError:
             pass
 
-    def __exit__(self, exc_type, exc, traceback) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 traceback: TracebackType | None) -> None:
         if exc_type is None:
             self.close()
         else:

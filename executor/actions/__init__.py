@@ -16,7 +16,7 @@ from __future__ import annotations
 __all__ = ["ActionBase", "ActionError", "VariableHandle"]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     if name in __all__:
         from executor.actions import base
 

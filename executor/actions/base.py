@@ -38,6 +38,7 @@ that is a ``var``.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import py_trees
 
@@ -59,7 +60,7 @@ class ActionBase(py_trees.behaviour.Behaviour):
 
     # -- life cycle hooks for subclasses ---------------------------------------------------------
 
-    def setup(self, **kwargs) -> None:
+    def setup(self, **kwargs: Any) -> None:
         """Acquire resources; override as needed (call it with ``**kwargs``; unknown keys are fine)."""
 
     def shutdown(self) -> None:

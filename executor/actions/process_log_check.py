@@ -6,7 +6,7 @@ of ``values``; fails once that process has ended and none was found.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from py_trees.common import Status
 
@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 class ProcessLogCheck(ActionBase):
     """Watches the captured output of a labelled run_process."""
 
-    def setup(self, **kwargs) -> None:
+    def setup(self, **kwargs: Any) -> None:
         self.context = kwargs.get("context")
 
     def execute(self, process_name: str, values: list, from_start: bool = True) -> None:

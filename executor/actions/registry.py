@@ -64,7 +64,7 @@ def _plugin_entry_points() -> dict[str, EntryPoint]:
     return _entry_points
 
 
-def _load_target(target: str):
+def _load_target(target: str) -> type:
     module_name, _, attr = target.partition(":")
     module = importlib.import_module(module_name)
     return getattr(module, attr)

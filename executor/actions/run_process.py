@@ -15,7 +15,8 @@ import signal
 import subprocess
 import threading
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import IO, Any
 
 from py_trees.common import Status
 
@@ -46,7 +47,7 @@ class RunProcess(ActionBase):
         self._output: list[str] = []
         self._output_lock = threading.Lock()
 
-    def setup(self, **kwargs) -> None:
+    def setup(self, **kwargs: Any) -> None:
         context = kwargs.get("context")
         # process_log_check finds a process by the label the scenario gave it (as the reference does): an
         # unlabelled run_process is not found under its action name. The builder sets osc_labelled; a
@@ -98,7 +99,10 @@ class RunProcess(ActionBase):
         self.feedback_message = f"'{shlex.join(self.command)}' failed with exit code {code}"
         return Status.FAILURE
 
-    def _read(self, pipe, log) -> None:
+    def _read(self, pipe: IO[bytes] | None, log: Callable[[str], None]) -> None:
+        if pipe is None:      # never: both streams are pipes
+            return
+
         def pump() -> None:
             for raw in iter(pipe.readline, b""):
                 line = raw.decode(errors="replace").rstrip("\r\n")

@@ -45,6 +45,7 @@ import select
 import signal
 import socket
 import sys
+from typing import TextIO
 
 from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, open_log, receive, send
 
@@ -140,7 +141,7 @@ def _fresh_stdio() -> None:
     unbuffered = bool(os.environ.get("PYTHONUNBUFFERED"))
     old = {name: getattr(sys, name) for name in ("stdin", "stdout", "stderr")}
 
-    def stream(fd: int, like) -> io.TextIOWrapper:
+    def stream(fd: int, like: TextIO) -> io.TextIOWrapper:
         if fd == 0:
             return io.TextIOWrapper(io.BufferedReader(io.FileIO(fd, "r", closefd=False)),
                                     encoding=like.encoding, errors=like.errors)

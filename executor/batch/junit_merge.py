@@ -22,11 +22,12 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
+from xml.etree import ElementTree as ET
 
 from sqlalchemy import Engine
 
 from coverage_engine.domains import HEADER_CHARS
-from coverage_engine.results.document import Case, document, suite_element
+from coverage_engine.results.document import Case, Totals, document, suite_element
 from coverage_engine.results.names import declared_scenarios, drawn_units, scenario_classname, variant_name
 from coverage_engine.results.read import JunitUnreadable, read_cases
 from coverage_engine.results.run_report import failure_text, iso_timestamp
@@ -231,7 +232,7 @@ class JobNotes:
 
 
 def job_suite(job: Job, variant: VariantInfo | None = None, interrupted: str | None = None,
-              notes: JobNotes | None = None):
+              notes: JobNotes | None = None) -> tuple[ET.Element, Totals]:
     """The testsuite of one job: a finished one, or (with ``interrupted``) one the interruption stopped.
 
     A variant the store does not know (recorded in another store, or copied from elsewhere) is named

@@ -15,8 +15,10 @@ from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
+from types import FrameType
 
 from coverage_engine.domains import InputDomain, declared_text, header_domains
+from coverage_engine.proposals import SEARCH_FILE
 from coverage_engine.results.atomic import write_output, write_text_atomically
 from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
@@ -208,7 +210,7 @@ def interrupts_stop(worker: Worker) -> Iterator[list[int]]:
     """While inside, SIGINT/SIGTERM stop the worker (a second SIGINT kills the children at once)."""
     received: list[int] = []
 
-    def handler(signum, _frame):
+    def handler(signum: int, _frame: FrameType | None) -> None:
         worker.stop(force=bool(received) and signum == signal.SIGINT)
         received.append(signum)
 
@@ -252,8 +254,11 @@ DISK_FULL_NAME = "no space left on device"
 
 
 def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *,
-              lease: float = DEFAULT_LEASE) -> LocalRun:
+              lease: float = DEFAULT_LEASE, echo_children: bool = True) -> LocalRun:
     """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report.
+
+    With one slot the child's own output is shown as it runs, unless ``echo_children`` is False (the
+    search loop, whose output is a line per round).
 
     A full disk stops the run like an interruption (the jobs it stopped stay resumable); the report of
     what finished is still attempted, and if it cannot be written either, the run says so instead of
@@ -263,7 +268,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     total = sum(counts.values())
     done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
     settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
-                              echo=sys.stdout.buffer if slots == 1 else None, cwd=os.getcwd(), hand_over_ahead=True)
+                              echo=sys.stdout.buffer if slots == 1 and echo_children else None, cwd=os.getcwd(), hand_over_ahead=True)
     summary, signum = run_worker(store, settings, reporter, total, done)
     interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
     if summary.disk_full is not None and interrupted is None:
@@ -314,6 +319,7 @@ def write_outcome_report(store: QueueStore, batch: Batch, path: str | os.PathLik
         write_output(path, xml_text)     # a device or FIFO is written in place, '-' is standard output
         if str(path) != "-" and os.path.realpath(Path(path).parent) == os.path.realpath(batch.output_dir):
             write_declared(Path(path).parent, variants.values())   # the batch's own results folder only
+            copy_search_estimate(Path(batch.input_dir), Path(path).parent)
     except OSError as exc:
         raise BatchError(f"cannot write the report {path}: {exc.strerror or exc}") from exc
     if interrupted is None:
@@ -334,6 +340,20 @@ def write_declared(folder: Path, variants: Iterable[VariantInfo]) -> None:
             declared[domain.key] = domain if known is None else known.merged(domain)
     if declared:
         write_text_atomically(folder / DECLARED_FILE, declared_text(declared.values()))
+
+
+def copy_search_estimate(variants: Path, results: Path) -> None:
+    """Copy the round's estimate (``search.json``, written by ``scenario_variation --from`` beside the
+    variants) into the results folder, as ``declared.json`` is kept there: the results folder alone then
+    tells ``scenario_coverage`` which round of a search it holds and what that round estimated."""
+    source = variants / SEARCH_FILE
+    if not source.is_file() or source.is_symlink() or os.path.realpath(variants) == os.path.realpath(results):
+        return
+    try:
+        text = source.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return                        # an estimate that cannot be read is not copied; the report goes on
+    write_text_atomically(results / SEARCH_FILE, text)
 
 
 #: Exit code of a batch that did not pass, or could not go on (a full disk).

@@ -14,6 +14,7 @@ import os
 import stat
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 from coverage_engine.results.document import Case
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
@@ -65,7 +66,7 @@ class NotARegularFile(OSError):
     """A file a child left that is a symbolic link or not a regular file (never followed, never read)."""
 
 
-def open_child_file(path: Path):
+def open_child_file(path: Path) -> BinaryIO:
     """Open a file a child wrote for reading, without following a symbolic link: a child (or anyone who can
     write into its folder) could otherwise make ``test.xml`` point at a secret that the report would carry."""
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))

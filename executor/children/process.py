@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, BinaryIO, Protocol
+from typing import IO, Any, BinaryIO, Protocol
 
 from executor.children.spawn import SpawnedProcess, can_spawn_logged, spawn_logged
 
@@ -243,7 +243,7 @@ class ChildProcess:
                 self._arm_locked(self.timeout, self._on_timeout)
             return self.proc.pid
 
-    def _spawn(self, stdin, stdout) -> subprocess.Popen[bytes]:
+    def _spawn(self, stdin: int | None, stdout: int | IO[bytes] | None) -> subprocess.Popen[bytes]:
         return subprocess.Popen(
             self.argv, cwd=self.cwd, stdin=stdin, stdout=stdout,
             stderr=None if stdout is None else subprocess.STDOUT,
@@ -275,7 +275,7 @@ class ChildProcess:
                 self._cancel_locked(self.grace if self._grace_asked is None else self._grace_asked)
             return proc.pid
 
-    def _fork_echoing(self, ticket: StartTicket):
+    def _fork_echoing(self, ticket: StartTicket) -> Any:
         """Have the launcher fork the command, its output going to a pipe (copied to the log and the echo)."""
         assert self.launcher is not None and self.log_path is not None
         with open(self.log_path, "ab" if self.append else "wb"):
@@ -363,7 +363,7 @@ class ChildProcess:
         self._signal_locked(signal.SIGINT)
         self._arm_kill_locked(grace)
 
-    def _arm_locked(self, delay: float, action) -> None:
+    def _arm_locked(self, delay: float, action: Callable[[], None]) -> None:
         timer = threading.Timer(delay, action)
         timer.daemon = True
         self._timers.append(timer)

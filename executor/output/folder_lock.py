@@ -17,6 +17,7 @@ import json
 import os
 import socket
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 LOCK_NAME = ".scenario-lock"
@@ -36,7 +37,7 @@ class FolderLock:
         self.command = command
         self._fd: int | None = None
 
-    def acquire(self, wait: bool = False, on_wait=None) -> FolderLock:
+    def acquire(self, wait: bool = False, on_wait: Callable[[str], object] | None = None) -> FolderLock:
         """Take the lock; :class:`FolderBusy` naming the holder, unless ``wait`` (then wait until it is free)."""
         import fcntl
 

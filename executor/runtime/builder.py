@@ -27,6 +27,7 @@ from coverage_engine.resolve.model import (
     CallMethod,
     Composite,
     EmitEvent,
+    Expr,
     Modified,
     Scenario,
     VariableRef,
@@ -108,7 +109,7 @@ def _build(node: Behavior, context: ScenarioContext) -> py_trees.behaviour.Behav
 # Actions
 
 
-def _parameters(function) -> tuple[Mapping[str, inspect.Parameter], bool]:
+def _parameters(function: Callable[..., object]) -> tuple[Mapping[str, inspect.Parameter], bool]:
     """Named parameters of ``function`` (without self) and whether it takes ``**kwargs``.
 
     Known per function (a bound method by its function): ``inspect.signature`` is the costly part of
@@ -119,7 +120,7 @@ def _parameters(function) -> tuple[Mapping[str, inspect.Parameter], bool]:
 
 
 @functools.lru_cache(maxsize=1024)
-def _signature_parameters(function, bound: bool) -> tuple[Mapping[str, inspect.Parameter], bool]:
+def _signature_parameters(function: Callable[..., object], bound: bool) -> tuple[Mapping[str, inspect.Parameter], bool]:
     try:
         signature = inspect.signature(function)
     except (TypeError, ValueError):
@@ -188,7 +189,7 @@ GUARDED_METHODS = ("setup", "initialise", "execute", "update", "terminate", "shu
 _PASS_THROUGH = (ScenarioEnd, OscError, EvaluationError)
 
 
-def _guard_life_cycle(instance, call: ActionCall) -> None:
+def _guard_life_cycle(instance: object, call: ActionCall) -> None:
     """Wrap the instance's life-cycle methods (instance attributes: the class stays untouched)."""
     for phase in GUARDED_METHODS:
         method = getattr(instance, phase, None)
@@ -197,7 +198,7 @@ def _guard_life_cycle(instance, call: ActionCall) -> None:
 
 
 def _guarded(method: Callable, phase: str, call: ActionCall) -> Callable:
-    def guarded(*args, **kwargs):
+    def guarded(*args: Any, **kwargs: Any) -> Any:
         try:
             return method(*args, **kwargs)
         except _PASS_THROUGH:
@@ -216,7 +217,7 @@ def _names(names: list[str]) -> str:
     return ", ".join(f"'{n}'" for n in names)
 
 
-def _argument_binder(instance, selected: dict, context: ScenarioContext) -> Callable[[], dict]:
+def _argument_binder(instance: object, selected: dict[str, Expr], context: ScenarioContext) -> Callable[[], dict]:
     """A function computing ``execute``'s keyword arguments from the current variable values."""
     variables = context.variables
 

@@ -16,6 +16,8 @@ from executor.runtime.logger import Logger
 from executor.runtime.planned_runs import RunOrigin
 
 if TYPE_CHECKING:
+    import py_trees
+
     from executor.runtime.coverage_sampling import CoverageSampler
     from executor.runtime.simulation import Clock
 
@@ -23,7 +25,7 @@ if TYPE_CHECKING:
 class ScenarioEnd(Exception):  # noqa: N818 - a control-flow signal, not an error
     """``emit end`` (success) or ``emit fail`` (failure): ends the scenario immediately."""
 
-    def __init__(self, success: bool, message: str = "", behaviour=None) -> None:
+    def __init__(self, success: bool, message: str = "", behaviour: py_trees.behaviour.Behaviour | None = None) -> None:
         super().__init__(message or ("end" if success else "fail"))
         self.success = success
         self.message = message
@@ -62,6 +64,13 @@ class ScenarioContext:
         self.processes: dict[str, list] = {}
         #: The run's cover()/record() sampler (executor.runtime.coverage_sampling), when it has items.
         self.coverage: CoverageSampler | None = None
+        #: How close the closest ``compare`` came to flipping (see executor.actions.compare), None before any.
+        self.check_margin: float | None = None
+
+    def note_check_margin(self, margin: float) -> None:
+        """Keep the smallest margin a check has had so far."""
+        if self.check_margin is None or margin < self.check_margin:
+            self.check_margin = margin
 
     def init_variables(self, scenario: Scenario) -> None:
         """Give every ``var`` its initial value (in declaration order, so one may use another)."""

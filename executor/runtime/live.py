@@ -7,6 +7,11 @@ terminal.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:   # py_trees and rich are imported when the live view starts
+    from py_trees.behaviour import Behaviour
 
 
 class LiveTree:
@@ -23,12 +28,12 @@ class LiveTree:
         self.last = 0.0
         self.started = False
 
-    def observers(self, run_name: str) -> list:
+    def observers(self, run_name: str) -> list[Callable[[Behaviour], None]]:
         """The observers for one scenario run (called by the session before the run)."""
         self.last = 0.0
         return [lambda root: self.show(run_name, root)]
 
-    def show(self, run_name: str, root, force: bool = False) -> None:
+    def show(self, run_name: str, root: Behaviour, force: bool = False) -> None:
         now = time.monotonic()
         if not force and now - self.last < self.interval and root.status.name == "RUNNING":
             return

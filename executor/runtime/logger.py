@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 import threading
+from typing import TextIO
 
 _lock = threading.Lock()
 
@@ -19,7 +20,7 @@ class Logger:
 
     __slots__ = ("name", "debug_enabled", "stream")
 
-    def __init__(self, name: str = "scenario_execution", debug: bool = False, stream=None) -> None:
+    def __init__(self, name: str = "scenario_execution", debug: bool = False, stream: TextIO | None = None) -> None:
         self.name = name
         self.debug_enabled = debug
         self.stream = stream

@@ -10,7 +10,7 @@ as the model says (:class:`coverage_engine.resolve.model.Modified`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import py_trees
 from py_trees import decorators
@@ -55,7 +55,7 @@ class UntilEvent(decorators.Decorator):
         self.event = event
         self.context = context
 
-    def tick(self):
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         if self.event in self.context.events:       # checked before the child runs again
             if self.decorated.status == Status.RUNNING:
                 self.decorated.stop(Status.INVALID)

@@ -11,19 +11,23 @@ Without a match the error points at the document (or the whole file).
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 
 from coverage_engine.location import Location
+
+if TYPE_CHECKING:   # PyYAML is imported when a parameter file is read
+    import yaml
 
 _QUOTED = re.compile(r"'([^'\n]+)'")
 
 
-def key_marks(document_node) -> dict[str, tuple[int, int]]:
+def key_marks(document_node: yaml.Node) -> dict[str, tuple[int, int]]:
     """``"scenario.param.member"`` / ``"…list[2]"`` → ``(line, column)`` (1-based) of each key or item."""
     import yaml
 
     marks: dict[str, tuple[int, int]] = {}
 
-    def walk(node, prefix: str) -> None:
+    def walk(node: yaml.Node, prefix: str) -> None:
         if isinstance(node, yaml.MappingNode):
             for key_node, value_node in node.value:
                 if not isinstance(key_node, yaml.ScalarNode):

@@ -15,12 +15,22 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from coverage_engine.domains import drawn_units_of
 from coverage_engine.errors import OscError, UserError
 from coverage_engine.results.files import RESULT_FILE
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.runtime.logger import Logger
+
+if TYPE_CHECKING:   # imported on the paths that need them (-h and option errors stay quick)
+    from coverage_engine.files.sce import SceDocument
+    from coverage_engine.resolve.model import ScenarioFile
+    from coverage_engine.results.run_report import ReportNames
+    from executor.runtime.planned_runs import PlannedRun
+
+    #: A resolved file and the output folder of each of its scenarios (``_output_dir`` of one document).
+    LoadedFile = tuple[ScenarioFile, dict[str, str]]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -81,7 +91,7 @@ def _check_options(request: ExecutionRequest) -> None:
 PROGRESS_FROM = 2000
 
 
-def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None):
+def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = None) -> list[LoadedFile]:
     """Resolve the file once per parameter document: ``[(ScenarioFile, {scenario: _output_dir})]``.
 
     A parameter-file error without a location is pointed at the file (at the key, when the message
@@ -123,7 +133,7 @@ def _load(request: ExecutionRequest, logger: Logger, output_root: str | None = N
     return loaded
 
 
-def _variant(scenario: str):
+def _variant(scenario: str) -> SceDocument | None:
     """The ``.sce`` document of a variant (None for an ``.osc``, or a ``.sce`` that cannot be read)."""
     if not scenario.endswith(SCE_SUFFIX):
         return None
@@ -143,7 +153,7 @@ def _located(exc: OscError, scenario: str) -> str:
     return exc.located(variant_lines(document).place if document is not None else str)
 
 
-def report_names(scenario: str, runs=(), document=None):
+def report_names(scenario: str, runs: Sequence[PlannedRun] = (), document: SceDocument | None = None) -> ReportNames:
     """How ``test.xml`` names the runs of ``scenario`` (a variant's names come from its ``.sce`` header,
     ``document`` when it was read already)."""
     from coverage_engine.results.run_report import report_names as names_for
@@ -201,7 +211,7 @@ def execute(request: ExecutionRequest) -> int:
     return _run(request, loaded, output_root, logger)
 
 
-def _run(request: ExecutionRequest, loaded, output_root: str | None, logger: Logger) -> int:
+def _run(request: ExecutionRequest, loaded: list[LoadedFile], output_root: str | None, logger: Logger) -> int:
     from coverage_engine.files.sce import variant_lines
     from coverage_engine.resolve.evaluate import add_import_paths
     from executor.runtime.planned_runs import RunOrigin, plan_runs

@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import os
 import signal
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from types import FrameType
+from typing import NoReturn
 
-from coverage_engine.results.scenario_result import ScenarioResult
+from coverage_engine.results.scenario_result import CHECK_MARGIN_PROPERTY, ScenarioResult
 from executor.runtime import external_methods
 from executor.runtime.context import Aborted, ScenarioContext
 from executor.runtime.logger import Logger
@@ -24,6 +26,7 @@ from executor.runtime.simulation import (
     Clock,
     SimulationClock,
     SimulationError,
+    UserSimulation,
     WallClock,
     reset_arguments,
     simulation_dt,
@@ -68,10 +71,10 @@ class SessionOutcome:
 
 
 @contextmanager
-def abort_on_signals():
+def abort_on_signals() -> Iterator[None]:
     """Turn SIGINT/SIGTERM into :class:`Aborted` in the main thread while scenarios run."""
 
-    def handler(signum, _frame):
+    def handler(signum: int, _frame: FrameType | None) -> NoReturn:
         raise Aborted(signum)
 
     previous = {}
@@ -146,6 +149,8 @@ def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger)
                                         recorders=_recorders(options, context, run.name, period, logger))
                 try:
                     results.append(runner.run())
+                    if context.check_margin is not None:
+                        results[-1].properties[CHECK_MARGIN_PROPERTY] = repr(context.check_margin)
                     if context.coverage is not None:
                         _write_coverage(context, results[-1], logger)
                 except RunAborted as aborted:
@@ -207,7 +212,7 @@ def _write_coverage(context: ScenarioContext, result: ScenarioResult, logger: Lo
         logger.error(f"coverage of '{result.name}' not written: {exc}")
 
 
-def _reset_simulation(simulation, run: PlannedRun) -> ScenarioResult | None:
+def _reset_simulation(simulation: UserSimulation, run: PlannedRun) -> ScenarioResult | None:
     """Reset the simulation for ``run``; a failed result when that is impossible."""
     if getattr(simulation, "reset", None) is None:
         return None

@@ -27,6 +27,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from coverage_engine.errors import UserError
@@ -101,6 +102,12 @@ class SimulationClock(Clock):
         self._time = 0.0
 
 
+#: A user's simulation object as the runtime sees it: duck-typed (``dt`` and ``step`` required; ``setup``,
+#: ``reset`` and ``shutdown`` optional; ``reset`` taking the scenario parameters it wants as its own
+#: arguments), so it has no static type beyond :class:`SimulationInterface`'s description.
+UserSimulation = Any
+
+
 class SimulationInterface(ABC):
     """Base class for a step-based simulation (or system under test) driven by the tick loop.
 
@@ -119,10 +126,10 @@ class SimulationInterface(ABC):
     def dt(self) -> float:
         """Seconds of simulated time per :meth:`step`."""
 
-    def setup(self, **kwargs) -> None:  # noqa: B027 - optional hook
+    def setup(self, **kwargs: Any) -> None:  # noqa: B027 - optional hook
         """Acquire resources once per file; gets ``logger``, ``output_dir``, ``tick_period``."""
 
-    def reset(self, **kwargs) -> None:  # noqa: B027 - optional hook
+    def reset(self, **kwargs: Any) -> None:  # noqa: B027 - optional hook
         """Bring the simulation to its start state for the next scenario."""
 
     @abstractmethod
@@ -170,7 +177,7 @@ def load_simulation(spec: str) -> object:
     return simulation
 
 
-def _import_file(target: str):
+def _import_file(target: str) -> ModuleType:
     path = Path(target).resolve()
     if not path.is_file():
         raise SimulationError(f"--simulation: file not found: {target}")
@@ -187,7 +194,7 @@ def _import_file(target: str):
     return module
 
 
-def _pick_class(module, target: str, class_name: str | None):
+def _pick_class(module: ModuleType, target: str, class_name: str | None) -> type:
     if class_name:
         cls = getattr(module, class_name, None)
         if not isinstance(cls, type):
@@ -205,7 +212,7 @@ def _pick_class(module, target: str, class_name: str | None):
 # Injecting scenario parameters into ``reset``
 
 
-def _reset_parameters(simulation) -> list[inspect.Parameter]:
+def _reset_parameters(simulation: UserSimulation) -> list[inspect.Parameter]:
     try:
         signature = inspect.signature(simulation.reset)
     except (TypeError, ValueError):
@@ -214,7 +221,8 @@ def _reset_parameters(simulation) -> list[inspect.Parameter]:
             if p.kind not in (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)]
 
 
-def reset_arguments(simulation, parameters: Mapping[str, object], scenario_name: str = "") -> dict:
+def reset_arguments(simulation: UserSimulation, parameters: Mapping[str, object],
+                    scenario_name: str = "") -> dict[str, object]:
     """The keyword arguments for ``simulation.reset``: scenario parameters matching its argument names.
 
     Raises :class:`SimulationError` naming every required argument the scenario does not declare.

@@ -25,7 +25,7 @@ from executor.actions.base import ActionError
 from executor.runtime.builder import build_tree
 from executor.runtime.context import Aborted, ScenarioContext, ScenarioEnd
 from executor.runtime.recording import Recorder
-from executor.runtime.simulation import SimulationClock, SimulationError, SimulationStepError
+from executor.runtime.simulation import SimulationClock, SimulationError, SimulationStepError, UserSimulation
 
 TickObserver = Callable[[py_trees.behaviour.Behaviour], None]
 
@@ -50,7 +50,7 @@ def describe_error(exc: BaseException, place: Callable[[Location], str] = str) -
     return f"{type(exc).__name__}: {exc}"
 
 
-def _leaf_with(root: py_trees.behaviour.Behaviour, status: Status):
+def _leaf_with(root: py_trees.behaviour.Behaviour, status: Status) -> py_trees.behaviour.Behaviour | None:
     """The first behaviour in tick order with ``status`` none of whose children has it (where it happened)."""
     for node in root.iterate():                      # children come before their parent
         if node.status is status and not any(child.status is status for child in node.children):
@@ -72,7 +72,8 @@ class ScenarioRunner:
     """Runs one scenario: build, set up, tick, tear down."""
 
     def __init__(self, scenario: Scenario, context: ScenarioContext, *, name: str | None = None,
-                 tick_period: float = 0.1, simulation=None, observers: list[TickObserver] | None = None,
+                 tick_period: float = 0.1, simulation: UserSimulation | None = None,
+                 observers: list[TickObserver] | None = None,
                  setup_kwargs: dict | None = None, skip_idle_ticks: bool = True,
                  recorders: list[Recorder] | None = None) -> None:
         self.scenario = scenario
@@ -130,7 +131,7 @@ class ScenarioRunner:
             else:
                 next_tick = time.monotonic()
 
-    def _tick(self, root, observers) -> bool:
+    def _tick(self, root: py_trees.behaviour.Behaviour, observers: list[TickObserver]) -> bool:
         """Tick the tree once and show it to the observers; True when the tree has finished."""
         recorders = self.recorders
         if recorders:
@@ -146,7 +147,8 @@ class ScenarioRunner:
             observe(root)
         return root.status is not Status.RUNNING
 
-    def _step_loop(self, root, simulation, observers) -> Status:
+    def _step_loop(self, root: py_trees.behaviour.Behaviour, simulation: UserSimulation,
+                   observers: list[TickObserver]) -> Status:
         """Step-based: one ``step()`` per ``dt``; the tree is ticked whenever a tick can matter.
 
         Between ticks in which only time/event/condition waits run, nothing can change before the
@@ -264,7 +266,7 @@ def _located(end: ScenarioEnd, place: Callable[[Location], str]) -> str:
     return f"{end.message} at {place(location)}" if location is not None else end.message
 
 
-def _mark_path(behaviour, status: Status) -> None:
+def _mark_path(behaviour: py_trees.behaviour.Behaviour | None, status: Status) -> None:
     """Show the behaviour that ended the scenario, and the composites above it, with the end status."""
     while behaviour is not None:
         behaviour.status = status

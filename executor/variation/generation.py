@@ -15,6 +15,7 @@ recorded, so every file on disk has its store row.
 
 from __future__ import annotations
 
+import os
 import signal
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,7 +29,7 @@ from executor.output.terminal import printable
 from executor.variation import report
 from executor.variation.report import echo
 from executor.variation.request import DEFAULT_MAX_VARIANTS, VariationRequest
-from executor.variation.writing import VariationStoreError, write_variants
+from executor.variation.writing import EXIT_INTERRUPTED, VariationStoreError, write_variants
 
 if TYPE_CHECKING:
     from sqlalchemy import Engine
@@ -36,6 +37,7 @@ if TYPE_CHECKING:
     from coverage_engine.variation.covering import TupleCoverage
     from coverage_engine.variation.plan import ParsedVariation, PlannedVariation, VariationPlan
     from coverage_engine.variation.strategies import StrategyOptions
+    from executor.variation.search import AdaptiveRound
     from store.variant_history import HeldVariants
 
 #: Bytes of one ``.sce`` file, roughly, for the disk-space estimate of ``--max-variants``.
@@ -78,12 +80,16 @@ def run(request: VariationRequest) -> int:
             echo(f"seed {seed} (pass --seed {seed} to make the same variants again)")
         options = strategies.StrategyOptions(request.strategy, request.strength, request.samples, seed or 0)
         parsed = parse_variation(Path(request.scenario), documents)
+        _check_adaptive(request, Location.whole_file(str(parsed.path)))
         engine = _open_store(request.store) if request.only_new else None
         held = None
         if engine is not None:
             held = _held(parsed, request, engine)
             strategies.check_continuable(options, len(held.assignments), held.runs, Location.whole_file(str(parsed.path)))
-        plan, tuples = _choose(parsed, request, options, held)
+        search = _search(parsed, request, seed or 0) if request.adaptive else None
+        if search is not None and not search.planned.rows:
+            return _nothing_proposed(request, search)
+        plan, tuples = _choose(parsed, request, options, held, search)
         report.describe(plan)
         if request.strategy != "full":
             echo(_strategy_summary(plan, request, tuples))
@@ -106,18 +112,63 @@ def run(request: VariationRequest) -> int:
         except FolderBusy as exc:
             raise OutputFolderBusy(f"{exc}; nothing was written", Location.whole_file(str(plan.path))) from None
         with lock:
-            return write_variants(plan, request, engine or _open_store(request.store), seed, tuples)
+            code = write_variants(plan, request, engine or _open_store(request.store), seed, tuples)
+            if search is not None and code != EXIT_INTERRUPTED:
+                from executor.variation.search import write_estimate
+
+                echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
+            return code
+
+
+def _check_adaptive(request: VariationRequest, where: Location) -> None:
+    """``--from`` goes with an adaptive strategy, and an adaptive strategy needs ``--from``."""
+    from coverage_engine.search import ADAPTIVE
+    from coverage_engine.variation.strategies import StrategyError
+
+    if request.adaptive and not request.from_results:
+        raise StrategyError(f"--strategy {request.strategy} proposes from earlier results: give them with --from "
+                            "RESULTS", where, hint="run a first round with --strategy lhs --samples N, run it with "
+                                                   "scenario_batch_execution, then pass its results folder")
+    if request.from_results and not request.adaptive:
+        raise StrategyError(f"--from is read by the adaptive strategies ({', '.join(ADAPTIVE)}), not by "
+                            f"--strategy {request.strategy}", where)
+
+
+def _search(parsed: ParsedVariation, request: VariationRequest, seed: int) -> AdaptiveRound:
+    """The adaptive strategy's round: the earlier runs read, the estimate printed, the proposals planned."""
+    from executor.variation.search import adaptive_round
+
+    return adaptive_round(parsed, request.from_results, request.strategy, request.samples, seed,
+                          objective=request.objective, maximise=request.maximise, threshold=request.threshold,
+                          resolution=request.resolution, round_number=request.round_number)
+
+
+def _nothing_proposed(request: VariationRequest, search: AdaptiveRound) -> int:
+    """An adaptive round with no point to try (its goal is met, or no hole is left): no variant is written, and
+    the estimate is kept all the same, so the search loop reads that it is done."""
+    from executor.variation.search import write_estimate
+
+    echo("no variant proposed: " + ("the goal is met" if search.record.estimate.done else "nothing is left to try"))
+    if not request.list_only:
+        os.makedirs(request.output_dir, exist_ok=True)
+        echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
+    return 0
 
 
 def _design(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
-            factor: int) -> PlannedVariation:
+            factor: int, search: AdaptiveRound | None = None) -> PlannedVariation:
     """The design stage: the points the request's strategy asks for (``factor`` x its samples for a sampler
-    redrawing after the keep conditions left out too many). An adaptive strategy plugs in here."""
+    redrawing after the keep conditions left out too many), or those an adaptive round proposed. A plain
+    strategy given a round number (the search loop's first round) writes the proposal line too."""
+    from coverage_engine.proposals import Proposal
     from coverage_engine.variation import strategies
     from coverage_engine.variation.design import design
 
+    if search is not None:
+        return search.planned
     limit = request.max_variants or DEFAULT_MAX_VARIANTS
-    planned = design(parsed, options, factor)
+    proposal = Proposal(request.round_number, request.strategy) if request.round_number is not None else None
+    planned = design(parsed, options, factor, proposal=proposal)
     wanted = planned.total if factor == 1 else options.samples or 0
     if wanted > limit and options.strategy not in strategies.COVERING:
         raise TooManyVariants(
@@ -130,7 +181,8 @@ def _design(parsed: ParsedVariation, request: VariationRequest, options: Strateg
 
 
 def _choose(parsed: ParsedVariation, request: VariationRequest, options: StrategyOptions,
-            held: HeldVariants | None) -> tuple[VariationPlan, TupleCoverage | None]:
+            held: HeldVariants | None,
+            search: AdaptiveRound | None = None) -> tuple[VariationPlan, TupleCoverage | None]:
     """Design, check and choose: the plan to write, and for a covering array the tuples it covers.
 
     A sampler whose draws the keep conditions thin out draws twice as many until ``--samples`` are left.
@@ -145,7 +197,7 @@ def _choose(parsed: ParsedVariation, request: VariationRequest, options: Strateg
     tuples = None
     factor = 1
     while True:
-        planned = _design(parsed, request, options, factor)
+        planned = _design(parsed, request, options, factor, search)
         if covering and options.t <= len(planned.sizes):   # (a strength beyond the dimensions is said later)
             refuse_oversized(planned, options, limit)      # before 2,000 values are checked
         checked = check_values(planned)

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
+
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
 DEFAULT_MAX_VARIANTS = 10_000_000
 
@@ -27,10 +29,27 @@ class VariationRequest:
     seed: int | None = None
     wait: bool = False
     only_new: bool = False
+    #: Results folders of earlier runs an adaptive strategy (boundary, fill-holes, falsify) proposes from.
+    from_results: tuple[str, ...] = ()
+    #: falsify: the record() item to minimise (or ``margin``); boundary with ``threshold``: the item that crosses it.
+    objective: str | None = None
+    maximise: bool = False
+    threshold: float | None = None
+    resolution: float = DEFAULT_RESOLUTION
+    #: The round written in each variant's proposal line; None: one more than the highest round read.
+    round_number: int | None = None
+
+    @property
+    def adaptive(self) -> bool:
+        """Whether the strategy proposes from earlier results (``--from``)."""
+        return self.strategy in ADAPTIVE
 
     def recorded_options(self, source: Path, seed: int | None = None) -> dict[str, object]:
         """The options kept with the run in the store, under the command line's names."""
         return {"output_dir": self.output_dir, "debug": self.debug, "log_model": self.log_model,
                 "list": self.list_only, "scenario_parameter_file": self.parameter_file,
                 "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
-                "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new}
+                "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new,
+                **({"from": list(self.from_results), "objective": self.objective, "maximise": self.maximise,
+                    "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number}
+                   if self.adaptive else {})}

@@ -1,0 +1,89 @@
+"""``scenario_variation --from RESULTS --strategy boundary|fill-holes|falsify``: the design stage of an
+adaptive round.
+
+The earlier runs of the source are read from the results folders (:mod:`coverage_engine.search.history`),
+the strategy proposes points of the unit cube over the variation's axes (:mod:`coverage_engine.search`),
+and :func:`~coverage_engine.variation.design.design_points` turns them into the planned variation, so the
+proposals pass the same value checks and keep conditions as any sampler's draw. Each variant carries the
+``# proposal`` line (round, strategy, the folders read); the round's estimate is printed and, once the
+variants are written, kept as ``OUT/search.json``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from coverage_engine.domains import InputDomain
+from coverage_engine.location import Location
+from coverage_engine.proposals import SEARCH_FILE, Proposal
+from coverage_engine.search.errors import SearchError
+from coverage_engine.search.estimate import RoundRecord, estimate_lines, write_round
+from coverage_engine.search.space import Space
+from executor.variation.report import echo
+
+if TYPE_CHECKING:
+    from coverage_engine.variation.plan import ParsedVariation, PlannedVariation
+
+
+@dataclass(frozen=True)
+class AdaptiveRound:
+    """The planned variants of one adaptive round and the record of what it estimated."""
+
+    planned: PlannedVariation
+    record: RoundRecord
+
+
+def space_of(parsed: ParsedVariation) -> Space:
+    """The axes of the variation as the unit cube the search works in (the mapping ``design_points`` applies)."""
+    from coverage_engine.variation.plan import DOCUMENT_KEY
+
+    axes = []
+    for dim in parsed.dimensions:
+        spec = dim.continuous
+        if spec is not None:
+            axes.append(InputDomain(dim.key, low=spec.low, high=spec.high, unit=spec.unit))
+        else:
+            axes.append(InputDomain(dim.key, values=tuple(choice.stored for choice in dim.choices)))
+    if parsed.documents is not None:
+        axes.append(InputDomain(DOCUMENT_KEY, values=tuple(range(len(parsed.documents)))))
+    return Space(tuple(axes))
+
+
+def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: str, samples: int | None,
+                   seed: int, *, objective: str | None, maximise: bool, threshold: float | None,
+                   resolution: float, round_number: int | None) -> AdaptiveRound:
+    """Read the earlier runs, propose this round's points and plan them as variants; the estimate is printed."""
+    from coverage_engine.search.history import MARGIN, read_history
+    from coverage_engine.search.propose import SearchOptions, propose_round
+    from coverage_engine.variation.design import design_points
+
+    where = Location.whole_file(str(parsed.path))
+    if samples is None:
+        raise SearchError(f"--strategy {strategy} needs --samples N (how many variants to propose)", where)
+    if not parsed.sizes:
+        raise SearchError(f"--strategy {strategy} searches over the varied parameters, and {parsed.path.name} "
+                          "varies none", where)
+    space = space_of(parsed)
+    margins = strategy == "falsify" and objective in (None, MARGIN)
+    history = read_history(sources, parsed.path, space.keys, margins=margins)
+    options = SearchOptions(strategy, samples, seed, sources, objective, maximise, threshold, resolution,
+                            round_number)
+    proposal = propose_round(space, history, options)
+    for note in proposal.notes:
+        echo(f"note: {note}")
+    record = proposal.record
+    for line in estimate_lines(record):
+        echo(line)
+    columns = [list(column) for column in zip(*proposal.points, strict=True)] if proposal.points \
+        else [[] for _ in space.axes]
+    note = f"strategy {strategy}, round {record.round}, {samples} samples, seed {seed}"
+    planned = design_points(parsed, columns, note=note, samples=samples,
+                            proposal=Proposal(record.round, strategy, sources))
+    return AdaptiveRound(planned, record)
+
+
+def write_estimate(output_dir: str, record: RoundRecord) -> Path:
+    """Keep the round's estimate beside its variants (``OUT/search.json``, written atomically)."""
+    return write_round(output_dir, SEARCH_FILE, record)

@@ -67,6 +67,9 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
                    "seed, command and job limits it was started with (a larger --budget runs more rounds).")
 @click.option("--lease", type=Seconds(0.2), default=60.0, show_default=True, metavar="S",
               help="Seconds a job is held without a heartbeat before another worker may take it.")
+@click.option("--enqueue-only", is_flag=True,
+              help="Queue each round's jobs in the shared store (--store) for 'scenario_batch_execution worker' "
+                   "on other hosts; the search runs none and waits for each round before proposing the next.")
 @click.option("--wait", is_flag=True, help="When another search uses -o, wait for it instead of stopping.")
 @store_option
 @debug_option
@@ -74,7 +77,8 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
 @click.argument("command", nargs=-1, type=click.UNPROCESSED)
 def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int, timeout: float | None,
             grace: float, retries: int, simulation: str | None, seed: int | None, objective: str | None,
-            maximise: bool, threshold: float | None, resolution: float, resume: bool, lease: float, wait: bool,
+            maximise: bool, threshold: float | None, resolution: float, resume: bool, lease: float, enqueue_only: bool,
+            wait: bool,
             store_url: str | None, debug: bool, scenario: str | None, command: tuple[str, ...]) -> int:
     """Search the values of SCENARIO (.osc) round by round: round 1 samples its ranges, each later round
     proposes variants from the results of the rounds before it (--goal), until --budget runs are spent or
@@ -112,7 +116,8 @@ def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int
     typed = (click.core.ParameterSource.COMMANDLINE, click.core.ParameterSource.ENVIRONMENT)
     given = tuple(name for name in SETTING_OPTIONS if ctx.get_parameter_source(name) in typed)
     request = SearchRequest(settings=settings, output_dir=output_dir, slots=slots, lease=lease, store=store_url,
-                            resume=resume, wait=wait, debug=debug, typed=given)
+                            resume=resume, wait=wait, debug=debug, typed=given,
+                            enqueue_only=enqueue_only)
     return run_search(request)
 
 

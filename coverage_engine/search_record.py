@@ -1,4 +1,4 @@
-"""What a search leaves in its folder, read back: the rounds, and what the latest round estimated.
+"""The one model of ``search.json``: its values, its writer, its reader, and its text.
 
 ``scenario_search`` works in one folder, one subfolder per round (:func:`round_folder`), each holding
 the round's variants and its results::
@@ -7,13 +7,25 @@ the round's variants and its results::
     search/round1/variants/*.sce        what round 1 ran (and its own search.json, when it estimated)
     search/round1/results/              the batch of round 1 (test.xml, a folder per job, search.json)
 
-The ``search.json`` of a round is written by ``scenario_variation --from`` (issue 35): the round, the
-strategy, the results read and the estimate (the boundary located so far, the worst case found, the
-holes aimed at, whether the goal is met). The search's own file has the same fields for its latest
-round, plus ``rounds`` (the runs and failures of each) and ``settings`` (what ``--resume`` continues
-with). This module reads either into a :class:`SearchRecord` and says it in a few lines of text; the
-search loop, the coverage report and the progress lines all use it, so the estimate reads the same
-everywhere. A file that is not there, not JSON or not of :data:`SEARCH_FORMAT` reads as None.
+The ``search.json`` of a round is written by ``scenario_variation --from`` (issue 35); the search's own
+file has the same fields for its latest estimate, plus ``rounds`` (the runs and failures of each) and
+``settings`` (what ``--resume`` continues with)::
+
+    {"format": "scenario-coverage/search", "round": 2, "strategy": "boundary", "from": [...], "runs_read": 40,
+     "objective": null, "maximise": false,
+     "estimate": {"boundary": null | {"axes": {KEY: {"value": 53.2, "error": 0.4, "unit": "kph"}},
+                                      "variants": [ASSIGNMENT, ...], "pairs": 5, "located": 2},
+                  "worst": null | {"objective": NAME, "value": -0.3, "assignment": ASSIGNMENT, "failed": true},
+                  "holes": null | {"targeted": 5, "guessed": 2},
+                  "done": false},
+     "rounds": [{"round": 1, "strategy": "lhs", "runs": 40, "failed": 3}, ...], "settings": {...}}
+
+``axes`` is filled where the boundary is one-dimensional; ``variants`` lists the runs on either side of
+it; ``pairs`` counts the neighbouring runs that disagree and ``located`` those within the resolution.
+``done`` says the goal is met. The adaptive strategies build these values (:mod:`coverage_engine.search`
+sits above this module), the search loop and the coverage report read them back, and all of them say an
+estimate with :func:`estimate_lines`, so it reads the same everywhere. A file that is not there, not JSON
+or not of :data:`SEARCH_FORMAT` reads as None.
 """
 
 from __future__ import annotations
@@ -28,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from coverage_engine.proposals import FIRST_ROUND, SEARCH_FILE, SEARCH_FORMAT
+from coverage_engine.results.atomic import write_text_atomically
 
 #: A round's folder is this prefix and the round's number (``round1``, ``round2``, …).
 ROUND_PREFIX = "round"
@@ -65,34 +78,38 @@ def round_folders(folder: str | os.PathLike[str]) -> list[tuple[int, Path]]:
     return sorted(found)
 
 
-Assignment = tuple[tuple[str, object], ...]
+#: A run's assignment as stored (parameter key -> value), in the order the run lists them.
+Assignment = Mapping[str, object]
+
+#: Most boundary variants kept in an estimate (the file stays small; the runs are in the results).
+MAX_BOUNDARY_VARIANTS = 200
 
 
 @dataclass(frozen=True)
-class BoundaryAxis:
-    """Where pass turns to fail along one parameter: the value, how far off it may be, its unit."""
+class AxisBoundary:
+    """Where pass turns to fail along one parameter: the value, how far off it may be (half the gap left;
+    None when the file does not say), its unit."""
 
-    key: str
     value: float
     error: float | None
-    unit: str
+    unit: str = ""
 
 
 @dataclass(frozen=True)
-class Boundary:
-    """The boundary located so far: per axis where it is one-dimensional, else the variants on it."""
+class BoundaryEstimate:
+    """The boundary located so far: per axis (key -> :class:`AxisBoundary`) where it is one-dimensional,
+    the runs beside it, how many neighbouring pairs of runs disagree (``pairs``) and how many of those are
+    within the resolution (``located``)."""
 
-    axes: tuple[BoundaryAxis, ...] = ()
+    axes: Mapping[str, AxisBoundary] = field(default_factory=dict)
     variants: tuple[Assignment, ...] = ()
-    #: Neighbouring pairs of runs that disagree, and how many of them are located to the resolution
-    #: (None when the file does not say).
-    pairs: int | None = None
-    located: int | None = None
+    pairs: int = 0
+    located: int = 0
 
 
 @dataclass(frozen=True)
 class WorstCase:
-    """The worst variant found by ``falsify``: its objective's value and its assignment."""
+    """The run with the worst objective value so far (lowest, or highest with ``--maximise``)."""
 
     objective: str
     value: float
@@ -101,8 +118,8 @@ class WorstCase:
 
 
 @dataclass(frozen=True)
-class HoleTargets:
-    """How many holes ``fill-holes`` aimed at, and how many of them by a guess (holes of measured values)."""
+class HoleCount:
+    """Holes aimed at: of the varied parameters and their crosses (``targeted``), of measured items (``guessed``)."""
 
     targeted: int
     guessed: int
@@ -110,11 +127,12 @@ class HoleTargets:
 
 @dataclass(frozen=True)
 class Estimate:
-    """What a round estimated; ``done`` when the goal is met."""
+    """What a round estimated; ``done`` when the goal is met (the boundary located to the resolution, a
+    failing variant found, no hole left)."""
 
-    boundary: Boundary | None = None
+    boundary: BoundaryEstimate | None = None
     worst: WorstCase | None = None
-    holes: HoleTargets | None = None
+    holes: HoleCount | None = None
     done: bool = False
 
     @property
@@ -134,15 +152,17 @@ class RoundSummary:
 
 @dataclass(frozen=True)
 class SearchRecord:
-    """A ``search.json``: the round (the latest, for the search's own file), its strategy and estimate."""
+    """A ``search.json``: a round's (written by ``scenario_variation --from``: how it was proposed, from
+    what, and the estimate), or a search's own (the latest round's fields, plus its ``rounds`` and the
+    ``settings`` that ``--resume`` continues with)."""
 
     round: int
     strategy: str
     sources: tuple[str, ...] = ()
     runs_read: int = 0
+    estimate: Estimate = field(default_factory=Estimate)
     objective: str | None = None
     maximise: bool = False
-    estimate: Estimate = field(default_factory=Estimate)
     rounds: tuple[RoundSummary, ...] = ()
     settings: Mapping[str, Any] = field(default_factory=dict)
 
@@ -153,27 +173,29 @@ def _number(value: object) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def _count(value: object) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) and value >= 0 else 0
+
+
 def _assignment(value: object) -> Assignment:
     if not isinstance(value, dict):
-        return ()
-    return tuple((str(k), v) for k, v in value.items() if isinstance(v, (str, int, float, bool)))
+        return {}
+    return {str(k): v for k, v in value.items() if isinstance(v, (str, int, float, bool))}
 
 
-def _boundary(value: object) -> Boundary | None:
+def _boundary(value: object) -> BoundaryEstimate | None:
     if not isinstance(value, dict):
         return None
-    axes = []
+    axes = {}
     for key, axis in (value.get("axes") or {}).items() if isinstance(value.get("axes"), dict) else ():
         where = _number(axis.get("value")) if isinstance(axis, dict) else None
         if where is not None:
             unit = axis.get("unit")
-            axes.append(BoundaryAxis(str(key), where, _number(axis.get("error")), unit if isinstance(unit, str) else ""))
+            axes[str(key)] = AxisBoundary(where, _number(axis.get("error")), unit if isinstance(unit, str) else "")
     variants = value.get("variants")
     listed = tuple(_assignment(v) for v in variants) if isinstance(variants, list) else ()
-    pairs, located = value.get("pairs"), value.get("located")
-    return Boundary(tuple(axes), tuple(v for v in listed if v),
-                    pairs if isinstance(pairs, int) and not isinstance(pairs, bool) else None,
-                    located if isinstance(located, int) and not isinstance(located, bool) else None)
+    return BoundaryEstimate(axes, tuple(v for v in listed if v), _count(value.get("pairs")),
+                            _count(value.get("located")))
 
 
 def _worst(value: object) -> WorstCase | None:
@@ -186,13 +208,13 @@ def _worst(value: object) -> WorstCase | None:
                      value.get("failed") is True)
 
 
-def _holes(value: object) -> HoleTargets | None:
+def _holes(value: object) -> HoleCount | None:
     if not isinstance(value, dict):
         return None
     targeted, guessed = value.get("targeted"), value.get("guessed")
     if not isinstance(targeted, int) or not isinstance(guessed, int):
         return None
-    return HoleTargets(targeted, guessed)
+    return HoleCount(targeted, guessed)
 
 
 def _rounds(value: object) -> tuple[RoundSummary, ...]:
@@ -221,10 +243,10 @@ def parse_search_record(document: object) -> SearchRecord | None:
         strategy=str(document.get("strategy") or ""),
         sources=tuple(str(s) for s in sources) if isinstance(sources, list) else (),
         runs_read=document["runs_read"] if isinstance(document.get("runs_read"), int) else 0,
-        objective=objective if isinstance(objective, str) else None,
-        maximise=document.get("maximise") is True,
         estimate=Estimate(_boundary(estimate.get("boundary")), _worst(estimate.get("worst")),
                           _holes(estimate.get("holes")), estimate.get("done") is True),
+        objective=objective if isinstance(objective, str) else None,
+        maximise=document.get("maximise") is True,
         rounds=_rounds(document.get("rounds")), settings=settings if isinstance(settings, dict) else {})
 
 
@@ -240,39 +262,48 @@ def read_search_record(folder: str | os.PathLike[str]) -> SearchRecord | None:
     return parse_search_record(document)
 
 
-def _assignment_dict(assignment: Assignment) -> dict[str, object]:
-    return dict(assignment)
+def _finite(value: float | None) -> float | None:
+    """JSON has no infinity or NaN: those are written as null (and read back as "not known")."""
+    return value if value is not None and math.isfinite(value) else None
 
 
-def estimate_document(estimate: Estimate) -> dict[str, Any]:
+def estimate_dict(estimate: Estimate) -> dict[str, Any]:
     """The ``estimate`` of a ``search.json`` (the form :func:`parse_search_record` reads)."""
     boundary = estimate.boundary
     worst = estimate.worst
+    holes = estimate.holes
     return {
         "boundary": None if boundary is None else {
-            "axes": {a.key: {"value": a.value, "error": a.error, "unit": a.unit} for a in boundary.axes},
-            "variants": [_assignment_dict(v) for v in boundary.variants],
-            **({"pairs": boundary.pairs} if boundary.pairs is not None else {}),
-            **({"located": boundary.located} if boundary.located is not None else {})},
-        "worst": None if worst is None else {"objective": worst.objective, "value": worst.value,
-                                             "assignment": _assignment_dict(worst.assignment),
-                                             "failed": worst.failed},
-        "holes": None if estimate.holes is None else {"targeted": estimate.holes.targeted,
-                                                      "guessed": estimate.holes.guessed},
-        "done": estimate.done}
+            "axes": {key: {"value": _finite(axis.value), "error": _finite(axis.error), "unit": axis.unit}
+                     for key, axis in boundary.axes.items()},
+            "variants": [dict(v) for v in boundary.variants[:MAX_BOUNDARY_VARIANTS]],
+            "pairs": boundary.pairs, "located": boundary.located},
+        "worst": None if worst is None else {"objective": worst.objective, "value": _finite(worst.value),
+                                             "assignment": dict(worst.assignment), "failed": worst.failed},
+        "holes": None if holes is None else {"targeted": holes.targeted, "guessed": holes.guessed},
+        "done": estimate.done,
+    }
 
 
 def search_document(record: SearchRecord) -> dict[str, Any]:
-    """The whole ``search.json`` of ``record`` (a search's own file: with its rounds and settings)."""
+    """The whole ``search.json`` of ``record``: a round's, or (with settings) a search's own, which adds the
+    rounds run and the settings."""
     document: dict[str, Any] = {
         "format": SEARCH_FORMAT, "round": record.round, "strategy": record.strategy, "from": list(record.sources),
         "runs_read": record.runs_read, "objective": record.objective, "maximise": record.maximise,
-        "estimate": estimate_document(record.estimate),
-        "rounds": [{"round": r.round, "strategy": r.strategy, "runs": r.runs, "failed": r.failed}
-                   for r in record.rounds]}
+        "estimate": estimate_dict(record.estimate)}
+    if record.settings or record.rounds:
+        document["rounds"] = [{"round": r.round, "strategy": r.strategy, "runs": r.runs, "failed": r.failed}
+                              for r in record.rounds]
     if record.settings:
         document["settings"] = dict(record.settings)
     return document
+
+
+def write_search_record(folder: str | os.PathLike[str], record: SearchRecord, name: str = SEARCH_FILE) -> Path:
+    """Write ``record`` as ``folder/name`` (``search.json``), atomically: a reader never sees half a file."""
+    text = json.dumps(search_document(record), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+    return write_text_atomically(Path(folder) / name, text)
 
 
 def short_key(key: str) -> str:
@@ -289,21 +320,30 @@ def value_text(value: object) -> str:
 
 def assignment_text(assignment: Assignment) -> str:
     """``speed=84.27, gap=30`` (keys without their scenario)."""
-    return ", ".join(f"{short_key(k)}={value_text(v)}" for k, v in assignment)
+    return ", ".join(f"{short_key(k)}={value_text(v)}" for k, v in assignment.items())
 
 
-def axis_text(axis: BoundaryAxis) -> str:
+def axis_text(key: str, axis: AxisBoundary) -> str:
     """``speed = 53.2 ± 0.4 kph``."""
     unit = f" {axis.unit}" if axis.unit else ""
     error = f" ± {axis.error:.2g}" if axis.error is not None else ""
-    return f"{short_key(axis.key)} = {axis.value:.4g}{error}{unit}"
+    return f"{short_key(key)} = {axis.value:.4g}{error}{unit}"
 
 
-def _pairs_text(boundary: Boundary) -> str:
-    """``boundary: 3 pair(s) of neighbouring runs disagree, 1 located``, or that none disagree yet."""
-    if not boundary.pairs:
-        return "boundary: not seen yet (no neighbouring runs disagree)"
-    return f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located or 0} located"
+#: What the estimate says of a boundary not seen yet.
+NOT_SEEN = "boundary: not seen yet (no run failed, or none passed)"
+
+
+def _pairs_text(boundary: BoundaryEstimate) -> str:
+    """``boundary: 3 pair(s) of neighbouring runs disagree, 1 of them located to the resolution``."""
+    return (f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located} of them "
+            "located to the resolution")
+
+
+def _holes_text(holes: HoleCount) -> str:
+    guessed = (f"; {holes.guessed} of measured items guessed at (inputs near the runs that came closest: a guess)"
+               if holes.guessed else "")
+    return f"holes: aiming at {holes.targeted} hole(s) of the varied parameters and their crosses{guessed}"
 
 
 def estimate_summary(estimate: Estimate) -> str:
@@ -311,11 +351,14 @@ def estimate_summary(estimate: Estimate) -> str:
     parts = []
     boundary = estimate.boundary
     if boundary is not None and boundary.axes:
-        parts.append("boundary " + "; ".join(axis_text(a) for a in boundary.axes))
+        parts.append("boundary " + "; ".join(axis_text(k, a) for k, a in boundary.axes.items()))
+    elif boundary is not None and boundary.pairs:
+        parts.append(f"boundary: {boundary.pairs} pair(s) of neighbouring runs disagree, {boundary.located} "
+                     "located")
     elif boundary is not None and boundary.variants:
         parts.append(f"boundary: {len(boundary.variants)} variant(s) where pass turns to fail")
-    elif boundary is not None and boundary.pairs is not None:
-        parts.append(_pairs_text(boundary))
+    elif boundary is not None:
+        parts.append("boundary not seen yet")
     if estimate.worst is not None:
         worst = estimate.worst
         parts.append(f"worst {worst.objective or 'value'} {worst.value:.4g}" + (" (failed)" if worst.failed else ""))
@@ -326,29 +369,35 @@ def estimate_summary(estimate: Estimate) -> str:
     return ", ".join(parts) or "no estimate yet"
 
 
+def _boundary_lines(boundary: BoundaryEstimate) -> list[str]:
+    lines = [f"boundary: {axis_text(key, axis)}" for key, axis in boundary.axes.items()]
+    if boundary.axes:
+        return lines
+    if boundary.pairs:
+        lines.append(_pairs_text(boundary))
+    if boundary.variants:
+        lines.append(f"boundary: {len(boundary.variants)} variant(s) where pass turns to fail")
+        lines.extend(f"  {assignment_text(variant)}" for variant in boundary.variants[:LIST_VARIANTS_UP_TO])
+        if len(boundary.variants) > LIST_VARIANTS_UP_TO:
+            lines.append(f"  ... {len(boundary.variants) - LIST_VARIANTS_UP_TO} more")
+    return lines or [NOT_SEEN]
+
+
 def estimate_lines(estimate: Estimate) -> list[str]:
-    """The estimate in a few lines (the search's last words, and the report's ``Search`` section)."""
-    lines = []
-    boundary = estimate.boundary
-    if boundary is not None:
-        if boundary.pairs is not None and not boundary.axes:
-            lines.append(_pairs_text(boundary))
-        for axis in boundary.axes:
-            lines.append(f"boundary: {axis_text(axis)}")
-        if boundary.variants and not boundary.axes:
-            lines.append(f"boundary: {len(boundary.variants)} variant(s) where pass turns to fail")
-            for variant in boundary.variants[:LIST_VARIANTS_UP_TO]:
-                lines.append(f"  {assignment_text(variant)}")
-            if len(boundary.variants) > LIST_VARIANTS_UP_TO:
-                lines.append(f"  ... {len(boundary.variants) - LIST_VARIANTS_UP_TO} more")
+    """The estimate in a few lines: what ``scenario_variation --from`` prints under its round's heading,
+    the search's last words, and the report's ``Search`` section (one rendering, so they read alike)."""
+    lines = _boundary_lines(estimate.boundary) if estimate.boundary is not None else []
     worst = estimate.worst
     if worst is not None:
         verdict = "failed" if worst.failed else "passed"
         lines.append(f"worst case: {worst.objective or 'value'} = {worst.value:.4g} ({verdict}) at "
                      f"{assignment_text(worst.assignment)}")
-    holes = estimate.holes
-    if holes is not None:
-        guessed = f", {holes.guessed} of them by a guess (holes of measured values)" if holes.guessed else ""
-        lines.append(f"holes: {holes.targeted} aimed at{guessed}")
+    if estimate.holes is not None:
+        lines.append(_holes_text(estimate.holes))
     lines.append("goal met" if estimate.done else "goal not met yet")
     return lines
+
+
+def round_heading(record: SearchRecord) -> str:
+    """``round 2, strategy boundary: 40 earlier run(s) read`` (the first line of a round's estimate)."""
+    return f"round {record.round}, strategy {record.strategy}: {record.runs_read} earlier run(s) read"

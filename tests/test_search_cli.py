@@ -13,7 +13,7 @@ import subprocess
 import time
 from pathlib import Path
 
-from batch_fixtures import STARTED, cli_env
+from batch_fixtures import STARTED, cli_env, start_cli
 from search_support import fails, round_runs, search_file, write_brake
 
 from store.queue import QueueStore
@@ -68,7 +68,31 @@ def test_a_search_spends_its_budget_in_rounds_and_says_so_per_round(tmp_path):
         assert f'# proposal {{"round": {number}, "strategy": "{strategy}"' in sce
     kept = json.loads((tmp_path / "search" / "round3" / "results" / "search.json").read_text(encoding="utf-8"))
     assert kept["round"] == 3 and kept["runs_read"] == 6                   # the estimate went with the results
-    assert record["estimate"] == kept["estimate"] and record["runs_read"] == 6
+
+
+def test_the_search_ends_with_an_estimate_from_every_round_the_last_included(tmp_path):
+    """Each round's estimate is made before it runs; the search's own is made again after its last round:
+    it is what scenario_variation --from estimates from every round's results."""
+    write_brake(tmp_path)
+    done = search("brake.osc", "--budget", "7", "--round", "3", "-j", "2", "--seed", "11", "-o", "search",
+                  cwd=tmp_path)
+    assert done.returncode == 0, done.stdout + done.stderr
+    record = search_file(tmp_path / "search")
+    assert record["round"] == 3 and record["runs_read"] == 7                   # round 3's run is counted
+    results = [str((tmp_path / "search" / f"round{n}" / "results").resolve()) for n in (1, 2, 3)]
+    assert record["from"] == results
+    sources = [arg for folder in results for arg in ("--from", folder)]
+    check = subprocess.run([str(BIN / "scenario_variation"), "brake.osc", *sources, "--strategy", "boundary",
+                            "--samples", "1", "-o", "check"], cwd=tmp_path, env=cli_env(tmp_path),
+                           capture_output=True, text=True, timeout=300)
+    assert check.returncode == 0, check.stdout + check.stderr
+    again = json.loads((tmp_path / "check" / "search.json").read_text(encoding="utf-8"))
+    assert again["runs_read"] == 7 and again["estimate"] == record["estimate"]
+    said = check.stdout.splitlines()
+    estimate = said[said.index("round 4, strategy boundary: 7 earlier run(s) read") + 1:]
+    words = done.stdout.splitlines()
+    last = words[next(i for i, line in enumerate(words) if line.startswith("search done:")) + 1:]
+    assert last == [f"  {line}" for line in estimate[:len(last)]] and last[-1].startswith("  goal ")
 
 
 def test_a_falsify_search_finds_a_failing_variant_and_the_report_marks_it(tmp_path):
@@ -198,3 +222,36 @@ def test_a_search_queues_its_rounds_in_a_postgresql_store(tmp_path, pg_url):
     finally:
         store.close()
     assert len(_check_verdicts(tmp_path / "search", 2)) == 4
+
+
+def test_enqueue_only_leaves_each_round_to_the_workers_and_waits_for_it(tmp_path, pg_url):
+    """--enqueue-only: each round's jobs go into the shared PostgreSQL store, a worker (another process; on
+    another host it would be the same) runs them, and the search proposes the next round only once the
+    round has finished: round 2 is estimated from all of round 1."""
+    write_brake(tmp_path)
+    host = tmp_path / "worker_host"
+    host.mkdir()
+    worker = start_cli(["worker", "--store", pg_url, "--wait", "--poll", "0.1", "-j", "2"], host, cli_env(host))
+    try:
+        done = search("brake.osc", "--budget", "6", "--round", "3", "--seed", "4", "--store", pg_url,
+                      "--enqueue-only", "-o", "search", cwd=tmp_path)
+    finally:
+        worker.send_signal(signal.SIGINT)
+        worked, _ = worker.communicate(timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.count("queued in the shared store; waiting for 'scenario_batch_execution worker") == 2
+    assert "search done: 6 run(s) in 2 round(s)" in done.stdout
+    runs = _check_verdicts(tmp_path / "search", 2)            # the search wrote each round's report
+    assert len(runs) == 6
+    kept = json.loads((tmp_path / "search" / "round2" / "results" / "search.json").read_text(encoding="utf-8"))
+    assert kept["runs_read"] == 3                             # round 2 was proposed from every run of round 1
+    store = QueueStore.open(pg_url)
+    try:
+        for number in (1, 2):
+            batch = store.latest_batch(output_dir=str((tmp_path / "search" / f"round{number}" / "results").resolve()))
+            assert batch is not None and batch.mode == "shared"
+            jobs = store.jobs(batch.id)
+            assert len(jobs) == 3 and all(j.status in FINAL and j.worker_pid == worker.pid for j in jobs)
+    finally:
+        store.close()
+    assert sum(1 for line in worked.splitlines() if re.match(r"\[\d+\] (passed|failed) +brake\d", line)) == 6, worked

@@ -15,7 +15,13 @@ from coverage_engine.domains import InputDomain
 from coverage_engine.proposals import SEARCH_FORMAT
 from coverage_engine.search.boundary import Observation, neighbour_pairs, propose_boundary
 from coverage_engine.search.errors import SearchError
-from coverage_engine.search.estimate import RoundRecord, estimate_lines, round_dict, write_round
+from coverage_engine.search.estimate import (
+    RoundRecord,
+    estimate_lines,
+    round_dict,
+    round_heading,
+    write_round,
+)
 from coverage_engine.search.falsify import Scored, propose_falsify
 from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.holes import propose_holes
@@ -150,8 +156,9 @@ def test_a_round_numbers_itself_after_the_runs_read_and_keeps_its_estimate_in_th
     assert document["estimate"]["boundary"]["axes"]["t.speed"] == {"value": 26.0, "error": 8.0, "unit": "kph"}
     written = json.loads(write_round(tmp_path, "search.json", proposal.record).read_text())
     assert written == document
-    assert estimate_lines(RoundRecord(3, "boundary", (), 3, proposal.record.estimate))[1] == \
-        "boundary: t.speed = 26kph ± 8kph"
+    assert estimate_lines(proposal.record.estimate)[0] == "boundary: speed = 26 ± 8 kph"
+    assert round_heading(RoundRecord(3, "boundary", (), 3, proposal.record.estimate)) == \
+        "round 3, strategy boundary: 3 earlier run(s) read"
     again = propose_round(space, History(runs), SearchOptions("boundary", 2, 1, (), round_number=7))
     assert again.record.round == 7
 

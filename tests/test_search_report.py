@@ -30,7 +30,8 @@ ROUND_TWO = {
     "estimate": {"boundary": {"axes": {}, "variants": [{"brake.speed": 12.0, "brake.gap": 26.0},
                                                        {"brake.speed": 18.0, "brake.gap": 45.0},
                                                        {"brake.speed": 24.0, "brake.gap": 72.0},
-                                                       {"brake.speed": 27.0, "brake.gap": 88.0}]},
+                                                       {"brake.speed": 27.0, "brake.gap": 88.0}],
+                              "pairs": 3, "located": 1},
                  "worst": {"objective": "margin", "value": -31.5, "assignment": {"brake.speed": 28.0,
                                                                                  "brake.gap": 24.0},
                            "failed": True},
@@ -148,7 +149,8 @@ def test_the_html_report_draws_the_rounds_the_boundary_and_the_worst_case(search
     assert len(colours) == 2                                   # each round its own colour
     assert boundary_line == 1 and boundary_rings == 3          # the variant beyond the gap's range is left out
     assert worst == 1 and "margin = -31.5" in worst_tip
-    assert estimate[0] == "boundary: 4 variant(s) where pass turns to fail" and estimate[-1] == "goal not met yet"
+    assert estimate[:2] == ["boundary: 3 pair(s) of neighbouring runs disagree, 1 of them located to the resolution",
+                            "boundary: 4 variant(s) where pass turns to fail"] and estimate[-1] == "goal not met yet"
     assert len(rows) == 2 and rows[1].split() == ["2", "boundary", "4", str(4 - sum(
         1 for _, _, s, g in round_runs(searched / "search/round2/results") if fails(s, g))),
         str(sum(1 for _, _, s, g in round_runs(searched / "search/round2/results") if fails(s, g)))]

@@ -125,7 +125,7 @@ def test_boundary_in_one_dimension_prints_the_value_and_stops_when_located(tmp_p
     axis = search["estimate"]["boundary"]["axes"]["brake.speed"]
     truth = critical_speed(decel, gap)
     assert abs(axis["value"] - truth) <= axis["error"] <= 0.01 * (SPEED[1] - SPEED[0]) / 2 + 1e-9
-    assert f"boundary: brake.speed = {axis['value']:.4g} ± " in out and "goal met" in out
+    assert f"boundary: speed = {axis['value']:.4g} ± " in out and "goal met" in out
     assert "no variant proposed: the goal is met" in out and not list((tmp_path / f"round{number}").glob("*.sce"))
 
 
@@ -148,7 +148,7 @@ def test_falsify_finds_a_failing_variant_the_first_round_missed(tmp_path, object
         chosen = ("--objective", objective) if objective == "min_gap" else ()     # margin: the default
         out = vary(tmp_path, *sources, "--strategy", "falsify", *chosen, "--samples", "8",
                    "--seed", "7", "-o", f"round{number}")
-        assert f"worst {objective} = " in out
+        assert f"worst case: {objective} = " in out
         search = json.loads((tmp_path / f"round{number}" / SEARCH_FILE).read_text())
         assert search["objective"] == objective and search["maximise"] is False
         worst = search["estimate"]["worst"]

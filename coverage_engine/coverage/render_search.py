@@ -10,7 +10,7 @@ from typing import Any
 
 from coverage_engine.coverage.search_rounds import SearchSection
 from coverage_engine.printable import printable
-from coverage_engine.search_record import estimate_document, estimate_lines
+from coverage_engine.search_record import estimate_dict, estimate_lines
 
 
 def search_head(section: SearchSection) -> str:
@@ -39,7 +39,7 @@ def search_dict(section: SearchSection) -> dict[str, Any]:
         "goal": section.goal, "budget": section.budget, "latest_round": section.latest_round,
         "rounds": [{"round": r.round, "strategy": r.strategy, "runs": r.runs, "passed": r.passed,
                     "not_passed": r.not_passed} for r in section.rounds],
-        "estimate": estimate_document(section.estimate),
+        "estimate": estimate_dict(section.estimate),
         "runs": [{"name": name, "round": number} for name, number in section.run_rounds],
     }
 

@@ -113,17 +113,17 @@ def _search_marks(section: SearchSection, frame: _Frame, x_key: str, y_key: str)
     boundary variants ringed) and the worst case (a ring with its name)."""
     marks = []
     boundary = section.estimate.boundary
-    for axis in boundary.axes if boundary is not None else ():
+    for key, axis in boundary.axes.items() if boundary is not None else ():
         error = axis.error or 0.0
-        tip = escape(f"boundary: {axis_text(axis)}")
-        if axis.key == x_key:
+        tip = escape(f"boundary: {axis_text(key, axis)}")
+        if key == x_key:
             left, right = frame.sx(axis.value - error), frame.sx(axis.value + error)
             at = frame.sx(axis.value)
             marks.append(f'<g class="boundary"><title>{tip}</title><rect x="{left:.1f}" y="{TOP}" '
                          f'width="{max(right - left, 0):.1f}" height="{frame.plot_h}" fill="#1c2430" fill-opacity="0.08"/>'
                          f'<line x1="{at:.1f}" y1="{TOP}" x2="{at:.1f}" y2="{TOP + frame.plot_h}" stroke="#1c2430" '
                          'stroke-width="2" stroke-dasharray="6 4"/></g>')
-        elif axis.key == y_key:
+        elif key == y_key:
             top, bottom = frame.sy(axis.value + error), frame.sy(axis.value - error)
             at = frame.sy(axis.value)
             marks.append(f'<g class="boundary"><title>{tip}</title><rect x="{LEFT}" y="{top:.1f}" '

@@ -8,7 +8,7 @@ as every sampler); this module only decides where they go.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.proposals import FIRST_ROUND
@@ -134,3 +134,13 @@ def propose_round(space: Space, history: History, options: SearchOptions) -> Rou
     left_out = len(history.finished) - len(placed)
     extra = (f"{left_out} run(s) whose values lie outside the variation's axes were left out",) if left_out else ()
     return RoundProposal(points, record, history.notes + extra + notes)
+
+
+def estimate_round(space: Space, history: History, options: SearchOptions) -> RoundRecord:
+    """What ``options.strategy`` estimates from ``history`` without proposing a variant (the search's last
+    word once its last round ran: every run counted). The round is the last one read unless
+    ``options.round_number`` says. ``fill-holes`` counts the holes a round of ``options.samples`` would aim
+    at (the holes left); the boundary and the worst case do not depend on the samples, so none is asked for."""
+    samples = options.samples if options.strategy == "fill-holes" else 0
+    number = options.round_number or max(history.last_round, FIRST_ROUND)
+    return propose_round(space, history, replace(options, samples=samples, round_number=number)).record

@@ -15,7 +15,7 @@ import signal
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from executor.children.process import ChildProcess, kill_group
+from executor.children.process import ChildProcess, ProcessOutcome, kill_group
 
 HOOK_TIMEOUT = 600.0
 HOOK_GRACE = 5.0
@@ -84,11 +84,20 @@ def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Pa
         finally:
             if track is not None:
                 track(None)
-        if outcome.timed_out:
-            problem(f"post-run '{hook}' timed out after {timeout:g} s")
-        elif outcome.cancelled:
-            problem(f"post-run '{hook}' cancelled" if pid is not None else f"post-run '{hook}' not run: cancelled")
+        failure = _failure(hook, outcome, started=pid is not None, timeout=timeout)
+        if failure is not None:
+            problem(failure)
+        if outcome.cancelled:
             break
-        elif outcome.returncode != 0:
-            problem(f"post-run '{hook}' failed with exit code {outcome.returncode}")
     return problems
+
+
+def _failure(hook: str, outcome: ProcessOutcome, *, started: bool, timeout: float) -> str | None:
+    """What went wrong with a hook that ran (or was cancelled before it started), else None."""
+    if outcome.timed_out:
+        return f"post-run '{hook}' timed out after {timeout:g} s"
+    if outcome.cancelled:
+        return f"post-run '{hook}' cancelled" if started else f"post-run '{hook}' not run: cancelled"
+    if outcome.returncode != 0:
+        return f"post-run '{hook}' failed with exit code {outcome.returncode}"
+    return None

@@ -28,6 +28,8 @@ if TYPE_CHECKING:   # imported on the paths that need them (-h and option errors
     from coverage_engine.resolve.model import ScenarioFile
     from coverage_engine.results.run_report import ReportNames
     from executor.runtime.planned_runs import PlannedRun
+    from executor.runtime.session import SessionOutcome
+    from executor.runtime.simulation import UserSimulation
 
     #: A resolved file and the output folder of each of its scenarios (``_output_dir`` of one document).
     LoadedFile = tuple[ScenarioFile, dict[str, str]]
@@ -233,22 +235,7 @@ def _run(request: ExecutionRequest, loaded: list[LoadedFile], output_root: str |
         logger.error(f"{request.scenario}: no scenario to run (the file declares none)")
         return EXIT_FAILED
 
-    simulation = None
-    if request.simulation:
-        from executor.runtime.simulation import SimulationError, load_simulation, simulation_dt
-
-        try:
-            simulation = load_simulation(request.simulation)
-            simulation_dt(simulation)
-        except SimulationError as exc:
-            if output_root:  # CI sees that nothing ran, and why
-                from coverage_engine.results.run_report import write_grouped
-                from coverage_engine.results.scenario_result import ScenarioResult
-
-                write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
-                              output_root, request.per_scenario, names)
-            raise UsageProblem(str(exc)) from exc
-
+    simulation = _load_simulation(request, runs, output_root, names) if request.simulation else None
     if request.dot:
         from executor.runtime.dot import write_dot_files
 
@@ -278,6 +265,32 @@ def _run(request: ExecutionRequest, loaded: list[LoadedFile], output_root: str |
     if report is not None:  # what the last update did not see (the aborted and skipped scenarios)
         for path in report.update(outcome.results, final=True):
             logger.debug(f"wrote {path}")
+    return _finish(request, outcome, output_root, logger)
+
+
+def _load_simulation(request: ExecutionRequest, runs: list[PlannedRun], output_root: str | None,
+                     names: ReportNames | None) -> UserSimulation:
+    """The ``--simulation`` object; one that cannot load is a usage problem, and with ``-o`` every run's
+    testcase says why nothing ran (CI sees it)."""
+    from executor.runtime.simulation import SimulationError, load_simulation, simulation_dt
+
+    assert request.simulation is not None
+    try:
+        simulation = load_simulation(request.simulation)
+        simulation_dt(simulation)
+    except SimulationError as exc:
+        if output_root:
+            from coverage_engine.results.run_report import write_grouped
+            from coverage_engine.results.scenario_result import ScenarioResult
+
+            write_grouped([ScenarioResult(r.name, False, str(exc), output_dir=r.output_dir) for r in runs],
+                          output_root, request.per_scenario, names)
+        raise UsageProblem(str(exc)) from exc
+    return simulation
+
+
+def _finish(request: ExecutionRequest, outcome: SessionOutcome, output_root: str | None, logger: Logger) -> int:
+    """After the runs: the post-run hooks (not after an abort), the closing line, the exit code."""
     if outcome.aborted:
         if request.post_run:
             logger.warning("aborted: --post-run commands skipped")

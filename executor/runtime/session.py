@@ -92,88 +92,109 @@ def abort_on_signals() -> Iterator[None]:
 
 def run_session(runs: list[PlannedRun], options: SessionOptions, logger: Logger) -> SessionOutcome:
     """Run every planned scenario and return the results (never raises for a scenario's failure)."""
-    from executor.runtime.tick_loop import RunAborted, ScenarioRunner
+    from executor.runtime.tick_loop import RunAborted
 
     outcome = SessionOutcome()
     results = outcome.results
     simulation = options.simulation
-    sim_clock: SimulationClock | None = None      # set exactly when there is a simulation
-    on_result = options.on_result
     external_methods.provide()
     with abort_on_signals():
         try:
+            sim_clock = None
             if simulation is not None:
-                try:
-                    sim_clock = SimulationClock(simulation_dt(simulation))
-                    setup = getattr(simulation, "setup", None)  # optional, like reset and shutdown
-                    if setup is not None:
-                        setup(logger=logger, output_dir=options.output_root, tick_period=sim_clock.dt)
-                except Exception as exc:  # noqa: BLE001 - user code
-                    message = str(exc) if isinstance(exc, SimulationError) else \
-                        f"simulation setup failed: {type(exc).__name__}: {exc}"
-                    logger.error(message)
-                    results.extend(ScenarioResult(r.name, False, message, output_dir=r.output_dir) for r in runs)
-                    simulation = None
+                started = _set_up_simulation(simulation, options, logger)
+                if isinstance(started, str):
+                    results.extend(ScenarioResult(r.name, False, started, output_dir=r.output_dir) for r in runs)
                     return outcome
+                sim_clock = started
             for run in runs:
-                if run.output_dir:
-                    try:
-                        os.makedirs(run.output_dir, exist_ok=True)
-                    except (OSError, ValueError) as exc:   # this run cannot run; the others still do
-                        reason = getattr(exc, "strerror", None) or str(exc)
-                        message = f"cannot create the output directory {run.output_dir!r}: {reason}"
-                        logger.error(f"Scenario '{run.name}' not run: {message}")
-                        results.append(ScenarioResult(run.name, False, message, output_dir=None, error=True))
-                        if on_result is not None:
-                            on_result(results)
-                        continue
-                external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
-                if simulation is not None and sim_clock is not None:
-                    failure = _reset_simulation(simulation, run)
-                    if failure is not None:
-                        logger.error(f"Scenario '{run.name}' failed: {failure.message}")
-                        results.append(failure)
-                        if on_result is not None:
-                            on_result(results)
-                        continue
-                    sim_clock.reset()
-                clock: Clock = sim_clock if sim_clock is not None else WallClock()
-                context = ScenarioContext(
-                    name=run.name, clock=clock,
-                    logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
-                    simulation=simulation, origin=options.origin)
-                observers = options.observer_factory(run.name) if options.observer_factory else []
-                period = sim_clock.dt if sim_clock is not None else options.tick_period
-                runner = ScenarioRunner(run.scenario, context, name=run.name, tick_period=period,
-                                        simulation=simulation, observers=observers,
-                                        recorders=_recorders(options, context, run.name, period, logger))
                 try:
-                    results.append(runner.run())
-                    if context.check_margin is not None:
-                        results[-1].properties[CHECK_MARGIN_PROPERTY] = repr(context.check_margin)
-                    if context.coverage is not None:
-                        _write_coverage(context, results[-1], logger)
+                    result = _run_one(run, options, logger, sim_clock)
                 except RunAborted as aborted:
                     results.append(aborted.result)
                     outcome.aborted = aborted.signum
                     break
-                if on_result is not None:
-                    on_result(results)
+                results.append(result)
+                if options.on_result is not None:
+                    options.on_result(results)
         except Aborted as exc:  # between scenarios (or while a report was written)
             outcome.aborted = exc.signum
         finally:
-            if simulation is not None:
-                try:
-                    shutdown = getattr(simulation, "shutdown", None)
-                    if shutdown is not None:
-                        shutdown()
-                except Exception as exc:  # noqa: BLE001 - user code
-                    logger.error(f"simulation shutdown failed: {type(exc).__name__}: {exc}")
+            if simulation is not None and sim_clock is not None:
+                _shut_down(simulation, logger)
     if outcome.aborted:
         recorded = {result.name for result in results}
         results.extend(ScenarioResult(r.name, False, NOT_STARTED, output_dir=r.output_dir, skipped=True)
                        for r in runs if r.name not in recorded)
     return outcome
+
+
+def _set_up_simulation(simulation: UserSimulation, options: SessionOptions, logger: Logger) -> SimulationClock | str:
+    """The simulation's clock once its optional ``setup`` ran, or the message of why it could not start."""
+    try:
+        sim_clock = SimulationClock(simulation_dt(simulation))
+        setup = getattr(simulation, "setup", None)  # optional, like reset and shutdown
+        if setup is not None:
+            setup(logger=logger, output_dir=options.output_root, tick_period=sim_clock.dt)
+    except Exception as exc:  # noqa: BLE001 - user code
+        message = str(exc) if isinstance(exc, SimulationError) else \
+            f"simulation setup failed: {type(exc).__name__}: {exc}"
+        logger.error(message)
+        return message
+    return sim_clock
+
+
+def _shut_down(simulation: UserSimulation, logger: Logger) -> None:
+    """The simulation's optional ``shutdown``; a failure is logged, never raised."""
+    try:
+        shutdown = getattr(simulation, "shutdown", None)
+        if shutdown is not None:
+            shutdown()
+    except Exception as exc:  # noqa: BLE001 - user code
+        logger.error(f"simulation shutdown failed: {type(exc).__name__}: {exc}")
+
+
+def _run_one(run: PlannedRun, options: SessionOptions, logger: Logger,
+             sim_clock: SimulationClock | None) -> ScenarioResult:
+    """One scenario: its folder, the simulation's reset, the run, its check margin and coverage.
+
+    A run that cannot start (no folder, a failed reset) is a failed result; the others still run.
+    Raises the tick loop's ``RunAborted`` when a signal ends the run.
+    """
+    from executor.runtime.tick_loop import ScenarioRunner
+
+    simulation = options.simulation
+    if run.output_dir:
+        try:
+            os.makedirs(run.output_dir, exist_ok=True)
+        except (OSError, ValueError) as exc:   # this run cannot run; the others still do
+            reason = getattr(exc, "strerror", None) or str(exc)
+            message = f"cannot create the output directory {run.output_dir!r}: {reason}"
+            logger.error(f"Scenario '{run.name}' not run: {message}")
+            return ScenarioResult(run.name, False, message, output_dir=None, error=True)
+    external_methods.set_directories(options.input_dir, run.output_dir or options.output_root)
+    if simulation is not None and sim_clock is not None:
+        failure = _reset_simulation(simulation, run)
+        if failure is not None:
+            logger.error(f"Scenario '{run.name}' failed: {failure.message}")
+            return failure
+        sim_clock.reset()
+    clock: Clock = sim_clock if sim_clock is not None else WallClock()
+    context = ScenarioContext(
+        name=run.name, clock=clock,
+        logger=logger, input_dir=options.input_dir, output_dir=run.output_dir or options.output_root,
+        simulation=simulation, origin=options.origin)
+    observers = options.observer_factory(run.name) if options.observer_factory else []
+    period = sim_clock.dt if sim_clock is not None else options.tick_period
+    runner = ScenarioRunner(run.scenario, context, name=run.name, tick_period=period,
+                            simulation=simulation, observers=observers,
+                            recorders=_recorders(options, context, run.name, period, logger))
+    result = runner.run()
+    if context.check_margin is not None:
+        result.properties[CHECK_MARGIN_PROPERTY] = repr(context.check_margin)
+    if context.coverage is not None:
+        _write_coverage(context, result, logger)
+    return result
 
 
 def _recorders(options: SessionOptions, context: ScenarioContext, name: str, period: float,

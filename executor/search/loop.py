@@ -7,7 +7,10 @@ resumed when it has one (every run recorded once, as ``scenario_batch_execution 
 its variants written again (the same seed, so the same variants) when it stopped before its batch.
 
 Output, in a pipe as on a terminal: one line per round (the round, its runs and failures, the runs
-so far against the budget, the current estimate), then the estimate in a few lines.
+so far against the budget, the estimate its variants were proposed from), then the estimate in a few
+lines. Each round's estimate is made while proposing, before the round runs; so once the last round ran,
+the goal's strategy estimates once more from every round (proposing nothing), and that is what the last
+words and the search's ``search.json`` say.
 """
 
 from __future__ import annotations
@@ -18,7 +21,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from coverage_engine.proposals import SEARCH_FILE
-from coverage_engine.results.atomic import write_text_atomically
 from coverage_engine.search_record import (
     Estimate,
     RoundSummary,
@@ -26,7 +28,7 @@ from coverage_engine.search_record import (
     estimate_lines,
     estimate_summary,
     read_search_record,
-    search_document,
+    write_search_record,
 )
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.orchestration import EXIT_INTERRUPTED
@@ -44,9 +46,7 @@ EXIT_DONE = 0
 EXIT_STOPPED = EXIT_INTERRUPTED[signal.SIGINT]
 
 
-def say(text: str) -> None:
-    """One line for people on stdout, flushed so it interleaves with the warnings on stderr."""
-    print(printable(text), flush=True)
+say = rounds.say
 
 
 class _QuietReporter(Reporter):
@@ -57,9 +57,7 @@ class _QuietReporter(Reporter):
 
 
 def _save(folder: Path, record: SearchRecord) -> None:
-    import json
-
-    write_text_atomically(folder / SEARCH_FILE, json.dumps(search_document(record), indent=1) + "\n")
+    write_search_record(folder, record)
 
 
 def _start(request: SearchRequest, folder: Path) -> tuple[SearchRequest, SearchRecord]:
@@ -116,6 +114,7 @@ def _rounds(request: SearchRequest, folder: Path, record: SearchRecord, store: Q
         f"{settings.round_size} a round, seed {settings.seed}"
         + (f"; resuming after round {len(record.rounds)}" if request.resume and record.rounds else ""))
     reporter = _QuietReporter()
+    counted_all = False           # whether the record's estimate was made from every round run
     while True:
         used = sum(r.runs for r in record.rounds)
         if used >= settings.budget or record.estimate.done:
@@ -131,7 +130,7 @@ def _rounds(request: SearchRequest, folder: Path, record: SearchRecord, store: Q
             estimate = read_search_record(place.variants)
             if estimate is not None and estimate.estimate.done and record.rounds:
                 record = _estimated(record, estimate)       # the goal is met by the rounds run: none more
-                _save(folder, record)
+                counted_all = True
                 break
             batch = rounds.open_batch(store, request, place)
         else:
@@ -149,6 +148,9 @@ def _rounds(request: SearchRequest, folder: Path, record: SearchRecord, store: Q
         basis = f"estimate from {record.runs_read} earlier run(s): " if estimate is not None and record.runs_read else ""
         say(f"round {place.number} ({strategy}): {ran.runs} run(s), {ran.failed} not passed; "
             f"{used + ran.runs} of {settings.budget} run(s); {basis}{estimate_summary(record.estimate)}")
+    if record.rounds and not counted_all:
+        record = _estimated(record, rounds.final_estimate(request, folder, record.rounds))
+    _save(folder, record)
     _finish(record, folder)
     return EXIT_DONE
 

@@ -74,6 +74,9 @@ class SearchRequest:
     resume: bool = False
     wait: bool = False
     debug: bool = False
+    #: ``--enqueue-only``: each round's jobs are queued in the shared store for ``scenario_batch_execution
+    #: worker`` processes (other hosts); the search runs none and waits for the round to finish.
+    enqueue_only: bool = False
     #: With ``--resume``: the settings typed on the command line (the rest come from the search's file).
     typed: tuple[str, ...] = ()
 

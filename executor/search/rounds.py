@@ -16,11 +16,19 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from coverage_engine.search_record import RESULTS_FOLDER, VARIANTS_FOLDER, round_folder
+from coverage_engine.results.files import RESULT_FILE
+from coverage_engine.search_record import (
+    RESULTS_FOLDER,
+    VARIANTS_FOLDER,
+    RoundSummary,
+    SearchRecord,
+    round_folder,
+)
 from coverage_engine.suffixes import SCE_SUFFIX
 from executor.batch import orchestration
 from executor.batch.errors import BatchError
 from executor.batch.progress import Reporter
+from executor.output.terminal import printable
 from executor.search.request import SearchRequest
 from executor.variation.request import VariationRequest
 from executor.variation.writing import EXIT_INTERRUPTED
@@ -28,8 +36,16 @@ from store.jobs import Batch, BatchOptions
 from store.queue import QueueStore
 from store.states import JobState
 
+#: Seconds between looks at the store while the workers run a round (``--enqueue-only``).
+WAIT_POLL = 0.25
+
 #: The sampler of round 1 when a range is continuous or the product of the values does not fit a round.
 FIRST_SAMPLER = "lhs"
+
+
+def say(text: str) -> None:
+    """One line for people on stdout, flushed so it interleaves with the warnings on stderr."""
+    print(printable(text), flush=True)
 
 
 class SearchInterrupted(Exception):
@@ -86,6 +102,20 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
                    maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution)
 
 
+def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummary, ...]) -> SearchRecord:
+    """The goal's estimate from the results of every round in ``done`` (the last one included), proposing
+    nothing; it is kept as the estimate of the last round."""
+    from coverage_engine.search.propose import SearchOptions
+    from executor.variation.search import estimate_only
+
+    settings = request.settings
+    last = done[-1].round
+    sources = tuple(str(RoundPlace.of(str(folder), r.round).results) for r in done)
+    options = SearchOptions(settings.goal, settings.round_size, settings.seed + last, sources, settings.objective,
+                            settings.maximise, settings.threshold, settings.resolution, last)
+    return estimate_only(Path(settings.scenario), options)
+
+
 def write_variants(variation: VariationRequest, *, show: bool) -> int:
     """Write the round's variants; returns how many ``.sce`` files the folder holds. The variation's own
     lines are shown only when ``show`` (``-d``); when it wrote none they are said with the error."""
@@ -121,7 +151,7 @@ def open_batch(store: QueueStore, request: SearchRequest, place: RoundPlace) -> 
         command=settings.command,
         options=BatchOptions(timeout=settings.timeout, retries=settings.retries, grace=settings.grace,
                              simulation=settings.simulation))
-    return orchestration.create_batch(store, batch_request)
+    return orchestration.create_batch(store, batch_request, mode="shared" if request.enqueue_only else "local")
 
 
 def round_batch(store: QueueStore, place: RoundPlace) -> Batch | None:
@@ -132,8 +162,11 @@ def round_batch(store: QueueStore, place: RoundPlace) -> Batch | None:
 
 
 def run_batch(store: QueueStore, batch: Batch, request: SearchRequest, reporter: Reporter) -> RoundRun:
-    """Run the batch's remaining jobs (``-j`` in parallel) and write its report; count its variants."""
+    """Run the batch's remaining jobs (``-j`` in parallel; with ``--enqueue-only`` the workers run them and
+    this waits) and write its report; count its variants."""
     store.resume(batch.id)              # jobs a Ctrl-C cancelled are queued again
+    if request.enqueue_only:
+        return _wait_for_workers(store, batch)
     ran = orchestration.run_local(store, batch, request.slots, reporter, lease=request.lease, echo_children=False)
     counts = ran.counts
     if ran.disk_full is not None:
@@ -141,3 +174,25 @@ def run_batch(store: QueueStore, batch: Batch, request: SearchRequest, reporter:
                          "then run it again with --resume")
     failed = sum(n for state, n in counts.items() if state is not JobState.PASSED)
     return RoundRun(sum(counts.values()), failed, ran.signum)
+
+
+def _unfinished(store: QueueStore, batch: Batch) -> int:
+    counts = store.counts(batch.id)
+    return counts[JobState.QUEUED] + counts[JobState.RUNNING]
+
+
+def _wait_for_workers(store: QueueStore, batch: Batch) -> RoundRun:
+    """``--enqueue-only``: wait until the workers sharing the store have run every job of the round's batch
+    (Ctrl-C stops the wait, not the workers: ``--resume`` waits again), then write the round's report."""
+    import time
+
+    left = _unfinished(store, batch)
+    if left:
+        say(f"round batch {batch.id}: {left} job(s) queued in the shared store; waiting for "
+                     "'scenario_batch_execution worker --store URL' to run them")
+    while left:
+        time.sleep(WAIT_POLL)
+        left = _unfinished(store, batch)
+    outcome = orchestration.write_outcome_report(store, batch, Path(batch.output_dir) / RESULT_FILE)
+    failed = sum(n for state, n in outcome.counts.items() if state is not JobState.PASSED)
+    return RoundRun(sum(outcome.counts.values()), failed, None)

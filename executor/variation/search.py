@@ -19,11 +19,12 @@ from coverage_engine.domains import InputDomain
 from coverage_engine.location import Location
 from coverage_engine.proposals import SEARCH_FILE, Proposal
 from coverage_engine.search.errors import SearchError
-from coverage_engine.search.estimate import RoundRecord, estimate_lines, write_round
+from coverage_engine.search.estimate import RoundRecord, estimate_lines, round_heading, write_round
 from coverage_engine.search.space import Space
 from executor.variation.report import echo
 
 if TYPE_CHECKING:
+    from coverage_engine.search.propose import SearchOptions
     from coverage_engine.variation.plan import ParsedVariation, PlannedVariation
 
 
@@ -74,7 +75,8 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
     for note in proposal.notes:
         echo(f"note: {note}")
     record = proposal.record
-    for line in estimate_lines(record):
+    echo(round_heading(record))
+    for line in estimate_lines(record.estimate):
         echo(line)
     columns = [list(column) for column in zip(*proposal.points, strict=True)] if proposal.points \
         else [[] for _ in space.axes]
@@ -82,6 +84,21 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
     planned = design_points(parsed, columns, note=note, samples=samples,
                             proposal=Proposal(record.round, strategy, sources))
     return AdaptiveRound(planned, record)
+
+
+def estimate_only(scenario: Path, options: SearchOptions) -> RoundRecord:
+    """What ``options.strategy`` estimates from the runs of ``options.sources`` (results folders of
+    ``scenario``'s variants), proposing nothing and printing nothing: the search's estimate after its last
+    round."""
+    from coverage_engine.search.history import MARGIN, read_history
+    from coverage_engine.search.propose import estimate_round
+    from coverage_engine.variation.plan import parse_variation
+
+    parsed = parse_variation(scenario)
+    space = space_of(parsed)
+    margins = options.strategy == "falsify" and options.objective in (None, MARGIN)
+    history = read_history(options.sources, parsed.path, space.keys, margins=margins)
+    return estimate_round(space, history, options)
 
 
 def write_estimate(output_dir: str, record: RoundRecord) -> Path:

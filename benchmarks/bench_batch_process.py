@@ -16,7 +16,12 @@ same interpreter, side by side in one run:
    runner asks for (make the job's folder, send its output to ``log.txt``, write ``test.xml``). Goal:
    ours <= 1.3x xargs (wall time).
 3. **Throughput per -j**: jobs/s of the built-in runner over ``--throughput`` variants with -j 1, 2, 4, …
-   up to the CPUs this process may use.
+   up to the CPUs this process may use (or the counts ``--jobs 1,2,4,8,16`` names).
+
+The figures are printed as a table and, last, as one JSON line (``{"cpus": …, "trees": {label: {"cpu_ms_per_job":
+…, "launched_over_xargs": …, "jobs_per_s": {"1": …}}}, …}``) for scripts that compare machines. Only the
+core dependencies are needed (the standard library here; the project's console scripts in this
+interpreter's folder).
 
 Every run writes into a fresh folder with a copy of the variation's store (a store that grows
 run after run would tilt the comparison). Runs of this tree and the baseline alternate.
@@ -32,6 +37,7 @@ The baseline tree is a plain source tree of an older commit, e.g.::
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -151,6 +157,16 @@ def usable_cpus() -> int:
     return len(os.sched_getaffinity(0))
 
 
+def job_counts(text: str | None, cpus: int) -> list[int]:
+    """The -j values of the throughput sweep: ``--jobs 1,2,4`` as given (1 first, for the ratios), else :func:`slot_counts`."""
+    if not text:
+        return slot_counts(cpus)
+    counts = sorted({int(part) for part in text.split(",") if part.strip()} | {1})
+    if counts[0] < 1:
+        raise SystemExit(f"--jobs: each count must be 1 or more: {text}")
+    return counts
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", help="a source tree of an older commit to measure side by side")
@@ -158,11 +174,14 @@ def main() -> int:
     parser.add_argument("--launched", type=int, default=500, help="launched jobs against xargs")
     parser.add_argument("--throughput", type=int, default=500, help="built-in jobs per -j for jobs/s")
     parser.add_argument("--rounds", type=int, default=1, help="runs of each; the best is reported")
+    parser.add_argument("--jobs", help="the -j values of the throughput sweep, e.g. 1,2,4,8,16 (default: "
+                                       "1, 2, 4, … up to the usable CPUs)")
     args = parser.parse_args()
     trees = [Tree("this tree", None)]
     if args.baseline:
         trees.insert(0, Tree(f"baseline {args.baseline}", str(Path(args.baseline).resolve())))
     cpus = usable_cpus()
+    sweep = job_counts(args.jobs, cpus)
     print(f"{cpus} usable CPUs; load average {os.getloadavg()[0]:.2f} at start", flush=True)
     failures = 0
     with tempfile.TemporaryDirectory(prefix="bench_batch_process_") as tmp:
@@ -181,7 +200,7 @@ def main() -> int:
                 keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, 2))
                 keep((tree.label, "launched"), batch(launched, root / f"launched_{tag}", tree, 2,
                                                      ("sh", "-c", CHILD, "sh", "{SCENARIO}", "{OUTPUT_DIR}")))
-                for slots in slot_counts(cpus):
+                for slots in sweep:
                     keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots))
             wall = xargs(launched, root / f"xargs_{round_}")
             keep(("xargs", "launched"), Measured(wall, 0.0))
@@ -194,7 +213,7 @@ def main() -> int:
                  for t in trees]
         print(f"{f'launched {args.launched} jobs -j2':<28}" + "".join(f"{c:>36}" for c in cells)
               + f"   (xargs -P 2: {xargs_wall:.2f} s)")
-        for slots in slot_counts(cpus):
+        for slots in sweep:
             cells = []
             for t in trees:
                 rate = args.throughput / best[(t.label, f"j{slots}")].wall
@@ -208,6 +227,16 @@ def main() -> int:
               f"launched/xargs {ratio:.2f}x (<= 1.3: {'met' if ratio <= 1.3 else 'MISSED'})")
         failures += per_job > 0.5
         failures += ratio > 1.3
+        figures = {t.label: {
+            "cpu_ms_per_job": round(best[(t.label, "cpu")].cpu / args.variants * 1000, 3),
+            "cpu_wall_s": round(best[(t.label, "cpu")].wall, 3),
+            "launched_s": round(best[(t.label, "launched")].wall, 3),
+            "launched_over_xargs": round(best[(t.label, "launched")].wall / xargs_wall, 3),
+            "jobs_per_s": {str(slots): round(args.throughput / best[(t.label, f"j{slots}")].wall, 1)
+                           for slots in sweep}} for t in trees}
+        print(json.dumps({"cpus": cpus, "variants": args.variants, "launched": args.launched,
+                          "throughput_jobs": args.throughput, "xargs_s": round(xargs_wall, 3), "trees": figures,
+                          "goals_met": {"cpu_ms_per_job": per_job <= 0.5, "launched_over_xargs": ratio <= 1.3}}))
     return 1 if failures else 0
 
 

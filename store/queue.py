@@ -180,11 +180,13 @@ class QueueStore(QueueReads):
         claimed.sort(key=lambda j: (j.batch_id, j.seq))
         return claimed
 
-    def started(self, job: Job, child_pid: int) -> bool:
-        """Record the process id of the job's child (its process group), so a dead holder's child can be ended."""
+    def started(self, job: Job, child_pid: int, started_at: float | None = None) -> bool:
+        """Record the process id of the job's child (its process group), so a dead holder's child can be ended,
+        and when the child started (None: the claim's time stands)."""
         statement = self._fast("started", sql.STARTED)
         with self._tx() as conn:
-            return statement.execute(conn, {**self._holder(job), "b_child": child_pid}).rowcount == 1
+            return statement.execute(conn, {**self._holder(job), "b_child": child_pid,
+                                            "b_start": started_at}).rowcount == 1
 
     def heartbeat(self, worker: WorkerIdentity, lease: float = DEFAULT_LEASE) -> set[int]:
         """Extend the leases of every job ``worker`` runs; returns the ids it still holds."""
@@ -225,7 +227,8 @@ class QueueStore(QueueReads):
                 job, result = end.job, end.result
                 update = self._fast(("end", end.transition), sql.end_statement(end.transition))
                 params = {**self._holder(job), "b_status": end.target.value, "b_exit": result.exit_code,
-                          "b_end": result.finished_at, "b_duration": result.duration, "b_reason": result.reason,
+                          "b_end": result.finished_at, "b_start": result.started_at, "b_duration": result.duration,
+                          "b_reason": result.reason,
                           "b_xml": result.junit_xml, "b_log": result.log_tail, "b_out": result.output_dir}
                 if update.execute(conn, params).rowcount != 1:
                     refused.append(end)

@@ -51,7 +51,7 @@ class QueueReads:
         stmt = select(jobs.c.status, func.count()).group_by(jobs.c.status)
         stmt = self._scope(stmt, batch_id, shared_only)
         with self._tx() as conn:
-            found: dict[str, int] = dict(conn.execute(stmt).tuples().all())
+            found: dict[str, int] = {status: count for status, count in conn.execute(stmt)}
         return {state: int(found.get(state.value, 0)) for state in JobState}
 
     def jobs(self, batch_id: int, *, results: bool = False) -> list[Job]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 from typing import Any
 
-from sqlalchemy import ColumnElement, Update, and_, bindparam, insert, select, update
+from sqlalchemy import ColumnElement, Update, and_, bindparam, func, insert, select, update
 
 from store import states
 from store.queue_tables import batches, job_attempts, jobs
@@ -32,8 +32,9 @@ HOLDER = and_(jobs.c.id == bindparam("g_job"), jobs.c.worker_id == bindparam("g_
 
 INSERT_ATTEMPT = insert(job_attempts)
 
+#: The child's process id, and when it started (a job claimed in a chunk starts later than its claim).
 STARTED = (update(jobs).where(jobs.c.status == JobState.RUNNING.value, HOLDER)
-           .values(child_pid=bindparam("b_child")))
+           .values(child_pid=bindparam("b_child"), started_at=func.coalesce(bindparam("b_start"), jobs.c.started_at)))
 
 HEARTBEAT = (update(jobs)
              .where(jobs.c.worker_id == bindparam("g_worker"), jobs.c.status == JobState.RUNNING.value)
@@ -81,6 +82,7 @@ def end_statement(transition: Transition) -> Update:
     src = sorted(s.value for s in states.sources(transition))
     assert src == [JobState.RUNNING.value], transition
     values: dict[str, Any] = dict(status=bindparam("b_status"), exit_code=bindparam("b_exit"), finished_at=bindparam("b_end"),
+                  started_at=bindparam("b_start"),          # the attempt's own start, not its claim
                   duration=bindparam("b_duration"), reason=bindparam("b_reason"), junit_xml=bindparam("b_xml"),
                   log_tail=bindparam("b_log"), output_dir=bindparam("b_out"), lease_expires_at=None)
     if transition is Transition.RETRY:

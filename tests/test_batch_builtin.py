@@ -23,6 +23,8 @@ import pytest
 from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
 from tests_schema import assert_valid
 
+from executor.batch.hand_over import CLAIM_CHUNK
+
 pytest_plugins = ["batch_stores"]            # the pg_url fixture
 
 BIN = Path(sys.executable).parent
@@ -306,13 +308,15 @@ def _most_running(store: Path, process: subprocess.Popen) -> int:
 
 
 def test_only_the_single_host_run_holds_jobs_ahead(tmp_path):
-    """The single-host run claims its slots and as many again (handed to the fork server ahead); a
-    ``worker``, even of one batch, claims no more than its slots, leaving the rest to other hosts; nor
-    does a run with ``--post-run`` hooks."""
+    """The single-host run claims a chunk of jobs at once (all 8 here: fewer than ``CLAIM_CHUNK``), held
+    until a slot frees; a ``worker``, even of one batch, claims no more than its slots, leaving the rest
+    to other hosts. With ``--post-run`` hooks the chunk is claimed too, but no job is handed to the fork
+    server ahead (the next job waits for the hooks: see the hooks' tests)."""
+    assert CLAIM_CHUNK >= 8
     env = make_variants(tmp_path, [f"h{i}" for i in range(8)], pause=0.2)
     store = tmp_path / "queue.db"
     local = start_cli(["-i", "out", "-o", "one", "-j", "1", "--store", f"sqlite:///{store}"], tmp_path, env)
-    assert _most_running(store, local) == 2 and local.returncode == 0
+    assert _most_running(store, local) == 8 and local.returncode == 0
     enqueued = run_cli(["-i", "out", "-o", "two", "--store", f"sqlite:///{store}", "--enqueue-only"], tmp_path, env)
     assert enqueued.returncode == 0, enqueued.stdout + enqueued.stderr
     worker = start_cli(["worker", "--store", f"sqlite:///{store}", "--batch", "2", "-j", "1", "--poll", "0.1"],
@@ -320,7 +324,7 @@ def test_only_the_single_host_run_holds_jobs_ahead(tmp_path):
     assert _most_running(store, worker) == 1 and worker.returncode == 0
     hooked = start_cli(["-i", "out", "-o", "three", "-j", "1", "--store", f"sqlite:///{store}",
                         "--post-run", f"{sys.executable} -c pass"], tmp_path, env)   # the next job waits for hooks
-    assert _most_running(store, hooked) == 1 and hooked.returncode == 0
+    assert _most_running(store, hooked) == 8 and hooked.returncode == 0
     assert len(records(tmp_path)) == 24
 
 
@@ -444,3 +448,23 @@ scenario job:
         running += step
         most = max(most, running)
     assert most == 2
+
+
+def test_the_fork_server_makes_a_jobs_folder_and_refuses_one_planted_as_a_link(tmp_path):
+    """A built-in job's folder and log are made by the fork server as the job starts (not by the batch
+    process); a folder planted as a link is refused there as the batch process refused it: the job is
+    an error that says so, nothing is written through the link, the other jobs run."""
+    env = make_variants(tmp_path, ["p0", "p1", "p2"])
+    victim = tmp_path / "victim"
+    victim.mkdir()
+    (tmp_path / "res").mkdir()
+    (tmp_path / "res" / "job1").symlink_to(victim)
+    done = run_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert list(victim.iterdir()) == []
+    errors = {c.get("name"): c.find("error") for c in ET.parse(tmp_path / "res/test.xml").getroot().iter("testcase")}
+    refused = [e for e in errors.values() if e is not None]
+    assert len(refused) == 1 and refused[0].get("message", "").startswith("cannot prepare the job: the job folder")
+    assert "symbolic link" in refused[0].get("message", "")
+    assert sorted(row[0] for row in records(tmp_path)) == ["p0", "p2"]
+    assert all((tmp_path / f"res/job{i}/log.txt").is_file() for i in (0, 2))

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from executor.batch.claim_pacing import FIRST_BACKOFF, ClaimPacer, StoreBackoff
-from executor.batch.hand_over import HandOver
+from executor.batch.hand_over import CLAIM_CHUNK, HandOver
 from executor.batch.job_run import Done, JobRun, Started
 from executor.batch.leases import LeaseKeeper
 from executor.batch.progress import PlainReporter
@@ -243,6 +243,22 @@ def test_hand_over_holds_jobs_ahead_only_for_a_built_in_batch_of_the_single_host
     assert HandOver("w", 2, ahead_allowed=False).decide(built_in) == 2
     undecided = HandOver("w", 3, ahead_allowed=True)
     assert undecided.holding() == 3
+
+
+def test_hand_over_claims_a_chunk_only_in_a_single_host_batch_that_cannot_halt(store):
+    built_in, launched = _batch(store, 1, command=()), _batch(store, 1)
+    halting = _batch(store, 1, halt=True)
+
+    def limit(hand_over: HandOver, batch: Batch, free: int) -> int:
+        hand_over.decide(batch)
+        return hand_over.claim_limit(free)
+
+    assert limit(HandOver("w", 2, ahead_allowed=True), built_in, 1) == CLAIM_CHUNK
+    assert limit(HandOver("w", 2, ahead_allowed=True), launched, 2) == CLAIM_CHUNK
+    assert limit(HandOver("w", 40, ahead_allowed=True), built_in, 3) == 80       # all it holds, when more
+    assert limit(HandOver("w", 2, ahead_allowed=True), halting, 1) == 1          # never past a failure
+    assert limit(HandOver("w", 2, ahead_allowed=False), built_in, 2) == 2        # a worker leaves the rest
+    assert HandOver("w", 2, ahead_allowed=True).claim_limit(2) == 2              # undecided: what is free
 
 
 def test_hand_over_starts_one_fork_server_and_again_after_it_ended(tmp_path, monkeypatch):

@@ -181,7 +181,8 @@ def test_driver_statements_bind_as_sqlalchemy_does_and_refuse_a_text_that_depend
     from store.queue_statements import end_statement
     from store.queue_tables import jobs
 
-    values = {"b_status": "passed", "b_exit": 0, "b_end": 2, "b_duration": 1, "b_reason": None, "b_xml": "<x/>",
+    values = {"b_status": "passed", "b_exit": 0, "b_end": 2, "b_start": 1, "b_duration": 1, "b_reason": None,
+              "b_xml": "<x/>",
               "b_log": "", "b_out": "/o", "g_job": 7, "g_holder": "w", "g_attempt": 1}
     on_sqlite = DriverStatement(end_statement(Transition.FINISH), sqlite.dialect())
     params = on_sqlite.parameters(values)

@@ -63,6 +63,10 @@ class ForkServerError(OSError):
     """The fork server could not be started, or ended."""
 
 
+class JobFolderRefused(ForkServerError):
+    """The server could not make the job's folder (a full disk, a folder that leads elsewhere)."""
+
+
 class ForkedProcess:
     """A job forked by the server, with the subset of ``subprocess.Popen`` that ChildProcess uses."""
 
@@ -93,6 +97,8 @@ class _Pending:
         self.event = threading.Event()
         self.pid: int | None = None
         self.reason: str | None = None
+        self.errno: int | None = None              # why the server could not start it, as an OSError's
+        self.folder_refused = False                # … because the job's folder could not be made
         self.withdrawn = False
 
 
@@ -170,9 +176,12 @@ class ForkServer:
         return self
 
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
-              output_fd: int, stdout: BinaryIO | None = None,
-              ticket: StartTicket | None = None) -> ForkedProcess | None:
-        """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``;
+              output_fd: int | None = None, stdout: BinaryIO | None = None,
+              ticket: StartTicket | None = None, log_path: str | None = None,
+              append: bool = False, log_folder: tuple[str, str] | None = None) -> ForkedProcess | None:
+        """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``, or
+        to ``log_path``, which the server opens as the job starts (this process makes no file per job),
+        after making its folder when ``log_folder`` says under which root (the root, its real path);
         waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
         request_id = str(next(self._ids))
         pending = _Pending()
@@ -185,9 +194,11 @@ class ForkServer:
             if ticket is not None and not ticket.on_withdraw(lambda: self._withdraw(request_id)):
                 self._forget(request_id)
                 return None
+            request: dict[str, object] = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)}
+            if output_fd is None:
+                request.update(log=log_path, append=append, folder=log_folder)
             try:
-                send(self._sock, {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment)},
-                     [output_fd])
+                send(self._sock, request, None if output_fd is None else [output_fd])
             except OSError as exc:
                 self._forget(request_id)
                 raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
@@ -197,7 +208,10 @@ class ForkServer:
         if pending.withdrawn:
             return None
         if pending.pid is None:
-            raise ForkServerError(f"the built-in runner could not start the job: {pending.reason}")
+            if pending.folder_refused:
+                raise JobFolderRefused(pending.errno, pending.reason)
+            message = f"the built-in runner could not start the job: {pending.reason}"
+            raise ForkServerError(message) if pending.errno is None else ForkServerError(pending.errno, message)
         process = ForkedProcess(pending.pid, stdout)
         with self._table_lock:
             early = self._early.pop(request_id, None)
@@ -256,6 +270,8 @@ class ForkServer:
             if pending is not None:
                 pending.pid = message.get("pid") if event == "started" else None
                 pending.reason = message.get("reason")
+                pending.errno = message.get("errno")
+                pending.folder_refused = bool(message.get("folder"))
                 pending.withdrawn = event == "withdrawn"
                 pending.event.set()
         elif event == "exited":

@@ -34,6 +34,32 @@ def command_target() -> str:
     return found[0].value
 
 
+class FolderRefused(OSError):
+    """The job's folder could not be made, or leads out of the output root (see :mod:`executor.batch.job_folders`)."""
+
+
+def open_log(request: dict) -> int:
+    """The job's log, opened (created, or appended to) for a request that names it (``log``, ``append``)
+    instead of carrying a descriptor: the server opens it just before the job starts, so the runner's
+    own process does not pay for creating a file per job (measured on ext4 under load: 0.4-0.6 ms of
+    CPU each, the largest single share of the runner's work per job). With ``folder`` (the output root
+    and its real path) the log's folder is made first, as the runner would have made it;
+    :class:`FolderRefused` when it cannot be."""
+    if request.get("folder"):
+        from pathlib import Path
+
+        from executor.batch.job_folders import prepare_job_folder
+
+        root, real_root = request["folder"]
+        try:
+            prepare_job_folder(Path(root), Path(os.path.dirname(request["log"])), real_root)
+        except OSError as exc:
+            raise FolderRefused(exc.errno, f"{exc.strerror or exc}" + (f": {exc.filename}" if exc.filename
+                                                                      else "")) from exc
+    flags = os.O_WRONLY | os.O_CREAT | os.O_CLOEXEC | (os.O_APPEND if request.get("append") else os.O_TRUNC)
+    return os.open(request["log"], flags, 0o666)
+
+
 def send(sock: socket.socket, message: dict, fds: list[int] | None = None) -> None:
     """One JSON message, with file descriptors attached when given."""
     data = json.dumps(message).encode()

@@ -22,7 +22,9 @@ modules are imported by the child that needs them, and die with it, so a job tha
 changes global state or hangs cannot touch the next one.
 
 Protocol (a Unix socket pair, one message per ``sendmsg``): the runner sends ``spawn`` requests as
-JSON with the job's output file descriptor attached; the server answers ``started`` (the child's pid)
+JSON with the job's output file descriptor attached, or naming the job's log (``log``, ``append``)
+and its output root (``folder``), so the server makes the job's folder and opens its log when the
+job starts (the runner's process then does no file-system work per job); the server answers ``started`` (the child's pid)
 or ``failed`` (why not), and ``exited`` with the raw wait status when the child ends. The server
 reaps its children and ends when the runner closes its end (it died or is done): it then kills
 the process groups of the children still running, so no job outlives its runner.
@@ -45,7 +47,7 @@ import socket
 import sys
 from typing import TextIO
 
-from executor.batch.fork_protocol import ENTRY_POINT, receive, send
+from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, open_log, receive, send
 
 
 class Command:
@@ -287,7 +289,8 @@ class _Server:
         self.sock = sock
         self.keep_spare = keep_spare
         self.limit = limit                             # jobs at once (0: no limit)
-        self.waiting: dict[str, tuple[dict, int]] = {}  # request id -> (request, output fd), in arrival order
+        self.waiting: dict[str, tuple[dict, int | None]] = {}  # request id -> (request, output fd), in
+                                                               # arrival order (None: it names its log)
         self.spare: _Spare | None = None
         self.scratch = scratch                         # the runner's folder for probe runs (it removes it)
         self.children: dict[int, str] = {}           # pid -> request id
@@ -334,7 +337,8 @@ class _Server:
     def _end_children(self) -> None:
         """The runner is gone: so are its jobs, and the spare (which may not have its own group yet)."""
         for _request, fd in self.waiting.values():
-            os.close(fd)
+            if fd is not None:
+                os.close(fd)
         self.waiting.clear()
         spare = self.spare
         for pid in self.children:
@@ -356,12 +360,12 @@ class _Server:
 
     def _request(self, request: dict, fds: list[int]) -> None:
         """A spawn request: it waits its turn behind earlier ones, and starts at once when a slot is free."""
-        if len(fds) != 1:
+        if len(fds) != 1 and (fds or not request.get("log")):
             for fd in fds:
                 os.close(fd)
             send(self.sock, {"id": request.get("id"), "event": "failed", "reason": "no output descriptor"})
             return
-        self.waiting[str(request.get("id"))] = (request, fds[0])
+        self.waiting[str(request.get("id"))] = (request, fds[0] if fds else None)
         self._start_waiting()
 
     def _start_waiting(self) -> None:
@@ -369,12 +373,22 @@ class _Server:
         while self.waiting and not (self.limit and len(self.children) >= self.limit):
             request_id = next(iter(self.waiting))
             request, fd = self.waiting.pop(request_id)
+            if fd is None:
+                try:
+                    fd = open_log(request)
+                except OSError as exc:
+                    refused = isinstance(exc, FolderRefused)
+                    send(self.sock, {"id": request_id, "event": "failed", "errno": exc.errno, "folder": refused,
+                                     "reason": f"cannot prepare the job: {exc.strerror}" if refused else
+                                     f"cannot open its log {request['log']}: {exc.strerror or exc}"})
+                    continue
             self._spawn(request, fd)
 
     def _withdraw(self, request_id: str) -> None:
         waiting = self.waiting.pop(request_id, None)
         if waiting is not None:
-            os.close(waiting[1])
+            if waiting[1] is not None:
+                os.close(waiting[1])
             send(self.sock, {"id": request_id, "event": "withdrawn"})
 
     def _spawn(self, request: dict, output_fd: int) -> None:
@@ -433,7 +447,8 @@ class _Server:
         if self.spare is not None:
             self.spare.sock.close()
         for _request, fd in self.waiting.values():
-            os.close(fd)
+            if fd is not None:
+                os.close(fd)
         self.waiting.clear()
 
     def _reap(self) -> None:

@@ -53,9 +53,14 @@ class JobFolders:
 
     def prepare(self, root: Path, folder: Path) -> bool:
         """:func:`prepare_job_folder`, the root made and its real path resolved on its first job."""
+        return prepare_job_folder(root, folder, self.real_root(root))
+
+    def real_root(self, root: Path) -> str:
+        """The root's real path, the root made on its first job (for a job folder made elsewhere: the
+        built-in runner's fork server makes it as the job starts, with :func:`prepare_job_folder`)."""
         key = str(root)
         real = self._real_roots.get(key)
         if real is None:
             root.mkdir(parents=True, exist_ok=True)
             real = self._real_roots[key] = os.path.realpath(root)
-        return prepare_job_folder(root, folder, real)
+        return real

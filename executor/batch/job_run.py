@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
-from executor.batch.builtin_runner import BUILTIN_COMMAND
+from executor.batch.builtin_runner import BUILTIN_COMMAND, JobFolderRefused
 from executor.batch.inputs import not_utf8_reason
 from executor.batch.launch_template import substitute
 from executor.batch.verdict import (
@@ -39,6 +39,8 @@ class Started:
     pid: int
     #: When the child started (``time.monotonic``): the worker writes the record only once it is this old.
     at: float = field(default_factory=time.monotonic)
+    #: The same moment by the wall clock, recorded as the job's start.
+    began: float = field(default_factory=time.time)
 
 
 @dataclass
@@ -138,7 +140,8 @@ class JobRun:
     def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
                  events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None,
                  environment: Mapping[str, str] | None = None, launcher: Launcher | None = None,
-                 made_folder: bool = False, order: tuple[StartOrder, int] | None = None) -> None:
+                 made_folder: bool = False, order: tuple[StartOrder, int] | None = None,
+                 folder_root: tuple[str, str] | None = None) -> None:
         self.job = job
         self.batch = batch
         self.output_dir = output_dir
@@ -149,6 +152,7 @@ class JobRun:
         self.environment = dict(environment or {})   # for the job's and its hooks' processes (the runner's mark)
         self.launcher = launcher                     # the built-in runner's fork server, for batches without a command
         self.made_folder = made_folder               # the worker made the job's folder for this attempt
+        self.folder_root = folder_root               # (root, its real path): the launcher makes the folder
         self.order = order
         self.lost = False                     # set when the lease was taken over: the result is dropped
         self._child: ChildProcess | None = None    # the job's child, then each post-run hook's in turn
@@ -197,15 +201,18 @@ class JobRun:
             finally:
                 self.pass_turn()              # an attempt that failed before its start passes it on
         except OSError as exc:
+            what = (exc.strerror or str(exc)) if isinstance(exc, JobFolderRefused) else \
+                f"cannot start the launch command: {exc.strerror or exc}"
             result = disk_full_result(self.output_dir, started, time.time()) if disk_full(exc) else launch_failure(
-                self.output_dir, started, time.time(), f"cannot start the launch command: {exc.strerror or exc}")
+                self.output_dir, started, time.time(), what)
         except Exception as exc:  # noqa: BLE001 - an attempt must always end with a result
             result = launch_failure(self.output_dir, started, time.time(), f"internal error: {exc!r}")
         self.events.put(Done(self, result, problems))
 
     def _attempt(self, problems: list[str]) -> JobResult:
         options = self.batch.options
-        self.output_dir.mkdir(parents=True, exist_ok=True)
+        if self.folder_root is None:             # else the fork server makes it as the job starts
+            self.output_dir.mkdir(parents=True, exist_ok=True)
         kept_log = rotate_log(self.output_dir, self.job.attempts)
         mark = FileMark.of(self.output_dir / RESULT_FILE)
         coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
@@ -213,6 +220,7 @@ class JobRun:
             raise OSError("the built-in runner is not available")
         unusable = not_utf8_reason(self.scenario_path)
         if unusable is not None:                  # said in the job's log too, where people look first
+            self.output_dir.mkdir(parents=True, exist_ok=True)
             (self.output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
             return launch_failure(self.output_dir, time.time(), time.time(), unusable)
         builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
@@ -221,7 +229,8 @@ class JobRun:
                              timeout=options.timeout, grace=options.grace, echo=self.echo,
                              environment={**self.environment, **dict(launch.environment)},
                              marker=job_marker(self.job.id, self.job.attempts),
-                             launcher=None if self.batch.command else self.launcher, on_sent=self.pass_turn)
+                             launcher=None if self.batch.command else self.launcher, on_sent=self.pass_turn,
+                             log_folder=self.folder_root)
         if self.order is not None:
             self.order[0].wait(self.order[1])
         with self._lock:

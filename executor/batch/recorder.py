@@ -147,7 +147,7 @@ class ResultRecorder:
 
     def _write_start(self, start: Started) -> bool:
         if not start.run.lost:
-            ok, _ = self.backoff.run(lambda: self.store.started(start.run.job, start.pid))
+            ok, _ = self.backoff.run(lambda: self.store.started(start.run.job, start.pid, start.began))
             if not ok:
                 return False
         del self._starts[start.run.job.id]

@@ -22,6 +22,7 @@ import hashlib
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -93,6 +94,7 @@ class Worker:
             at_once=settings.slots == 1 or not settings.hand_over_ahead)
         self._events: queue.Queue[Started | Done] = queue.Queue()
         self._runs: dict[int, JobRun] = {}             # jobs started and not ended
+        self._waiting: deque[Job] = deque()            # jobs claimed in a chunk, not started yet
         self._batches: dict[int, Batch] = {}
         self._stop = threading.Event()
         self._force = threading.Event()
@@ -157,12 +159,14 @@ class Worker:
                     self.reporter.warn(f"{self.recorder.drop()} result(s) could not be written to the store")
             if ready and now >= next_sweep and self._store_step(self._sweep):
                 next_sweep = now + self.leases.every
-            if ready and (self._runs or self.recorder or self._unsure_claims) \
+            if ready and (self._runs or self._waiting or self.recorder or self._unsure_claims) \
                     and (now >= next_beat or self._unsure_claims) and self._store_step(self._heartbeat):
                 next_beat = now + self.leases.every
+            if self._waiting and ready and not self._stop.is_set():
+                self._store_step(self._start_waiting)
             if self._may_claim(now):
                 self._store_step(self._claim)
-            if not self._runs and not self.recorder:
+            if not self._runs and not self._waiting and not self.recorder:
                 if self._stop.is_set():
                     self.summary.interrupted = True
                     break
@@ -181,7 +185,7 @@ class Worker:
     # ------------------------------------------------------------------ claiming and starting
     def _may_claim(self, now: float) -> bool:
         free = self.hand_over.holding() - len(self._runs)
-        if self._stop.is_set() or free <= 0 or not self.backoff.ready(now):
+        if self._stop.is_set() or self._waiting or free <= 0 or not self.backoff.ready(now):
             return False
         if self.settings.batch_id is not None and self.recorder.halted(self.settings.batch_id):
             return False
@@ -190,19 +194,25 @@ class Worker:
     def _claim(self) -> None:
         holding = self.hand_over.holding() if self.settings.batch_id is None else \
             self.hand_over.decide(self._batch(self.settings.batch_id))
-        free = holding - len(self._runs)
+        limit = self.hand_over.claim_limit(holding - len(self._runs))
         try:
-            jobs = self.store.claim(self.identity, limit=free, batch_id=self.settings.batch_id,
+            jobs = self.store.claim(self.identity, limit=limit, batch_id=self.settings.batch_id,
                                     shared_only=self.settings.batch_id is None, lease=self.settings.lease)
         except StoreUnavailable:
             self._unsure_claims = True      # the claim may have committed without us hearing back
             raise
-        self.pacer.claimed(free, len(jobs))
-        for index, job in enumerate(jobs):
+        self.pacer.claimed(limit, len(jobs))
+        self._waiting.extend(jobs)
+        self._start_waiting()
+
+    def _start_waiting(self) -> None:
+        """Start claimed jobs while a slot is free (claim order); one the store could not prepare waits on."""
+        while self._waiting and len(self._runs) < self.hand_over.holding():
+            job = self._waiting.popleft()
             try:
                 self._start(job)
             except BaseException:
-                self._give_back([j.id for j in jobs[index:]])
+                self._waiting.appendleft(job)
                 raise
 
     def _give_back(self, job_ids: list[int]) -> None:
@@ -230,8 +240,14 @@ class Worker:
         problem: str | None = None
         full_disk = False                   # the problem is a full disk: the job is stopped, not judged
         made_folder = False
+        echo = self.settings.echo if self.settings.slots == 1 else None
+        # a built-in job's folder is made by the fork server as the job starts (not by this process)
+        folder_root = None
         try:
-            made_folder = self._folders.prepare(root, output_dir)
+            if batch.command or echo is not None:
+                made_folder = self._folders.prepare(root, output_dir)
+            else:
+                folder_root = (str(root), self._folders.real_root(root))
             scenario = self._scenario_file(job, batch, output_dir)
         except StoreError:
             raise
@@ -248,10 +264,9 @@ class Worker:
             except ForkServerError as exc:
                 problem = str(exc)
         order = self.hand_over.order
-        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd,
-                     echo=self.settings.echo if self.settings.slots == 1 else None,
+        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
                      environment={RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)},
-                     launcher=launcher, made_folder=made_folder,
+                     launcher=launcher, made_folder=made_folder, folder_root=folder_root,
                      order=(order, order.take()))
         self._runs[job.id] = run
         self._started += 1
@@ -288,8 +303,11 @@ class Worker:
     def _heartbeat(self) -> None:
         """Extend the leases of the jobs running and of those whose result waits; stop the lost ones."""
         waiting = self.recorder.unwritten()
-        lost = self.leases.heartbeat({*self._runs, *waiting})
+        lost = self.leases.heartbeat({*self._runs, *waiting, *(job.id for job in self._waiting)})
         self._unsure_claims = False
+        for job in [job for job in self._waiting if job.id in lost]:
+            self._waiting.remove(job)
+            self.reporter.warn(f"lost the lease on {job.name} before it started; another worker runs it")
         for job_id in sorted(lost):
             run = self._runs.get(job_id) or waiting.get(job_id)
             if run is not None and not run.lost:
@@ -306,6 +324,10 @@ class Worker:
         return counts[JobState.QUEUED] + counts[JobState.RUNNING]
 
     def _cancel_all(self) -> None:
+        if self._waiting:                    # claimed, never started: back to the queue
+            job_ids = [job.id for job in self._waiting]
+            self._waiting.clear()
+            self._give_back(job_ids)
         # newest first: the jobs handed to the fork server ahead are withdrawn before the running
         # ones are stopped, so none of them starts in the slot a stopped job leaves
         if self._force.is_set():

@@ -21,6 +21,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import IO, Any, BinaryIO, Protocol
 
+from executor.children.spawn import SpawnedProcess, can_spawn_logged, spawn_logged
+
 _CHUNK = 64 * 1024
 
 #: Errors that mean "the disk is full", whoever met them.
@@ -70,9 +72,12 @@ class StartTicket:
 class Launcher(Protocol):
     """Starts a command some other way than ``exec`` (the built-in runner forks it from a warm server)."""
 
-    def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], output_fd: int,
-              stdout: BinaryIO | None = None, ticket: StartTicket | None = None) -> Any:
-        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``; a Popen-like object,
+    def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
+              output_fd: int | None = None, stdout: BinaryIO | None = None, ticket: StartTicket | None = None,
+              log_path: str | None = None, append: bool = False, log_folder: tuple[str, str] | None = None) -> Any:
+        """Start ``argv`` in its own session with stdout and stderr on ``output_fd``, or on the file
+        ``log_path`` that the launcher opens itself (truncated, or appended to; its folder made first
+        when ``log_folder`` names the root it must lie in and the root's real path); a Popen-like object,
         or None when ``ticket`` was withdrawn before the start (it may wait for a free slot)."""
 
 
@@ -183,7 +188,7 @@ class ChildProcess:
                  timeout: float | None = None, grace: float = 5.0, echo: BinaryIO | None = None,
                  marker: str | None = None, environment: Mapping[str, str] | None = None,
                  append: bool = False, launcher: Launcher | None = None,
-                 on_sent: Callable[[], None] | None = None) -> None:
+                 on_sent: Callable[[], None] | None = None, log_folder: tuple[str, str] | None = None) -> None:
         self.argv = list(argv)
         self.log_path = log_path               # None: stdin, stdout and stderr are this process's
         self.append = append
@@ -193,10 +198,11 @@ class ChildProcess:
         self.echo = echo
         self.launcher = launcher               # None: exec argv; else the launcher forks it (built-in runner)
         self.on_sent = on_sent                 # told when the launcher has the request (see StartTicket)
+        self.log_folder = log_folder           # the launcher makes the log's folder: (root, its real path)
         self.extra_env = dict(environment or {})
         if marker is not None:
             self.extra_env[JOB_ENV] = marker
-        self.proc: subprocess.Popen[bytes] | None = None
+        self.proc: subprocess.Popen[bytes] | SpawnedProcess | None = None
         self._lock = threading.Lock()
         self._timers: list[threading.Timer] = []
         self._timed_out = False
@@ -226,6 +232,9 @@ class ChildProcess:
                 return None
             if self.log_path is None:
                 self.proc = self._spawn(None, None)
+            elif self.echo is None and can_spawn_logged(self.cwd):     # the child opens its log
+                self.proc = spawn_logged(self.argv, self.log_path, append=self.append,
+                                         extra_environment=self.extra_env)
             else:
                 with open(self.log_path, "ab" if self.append else "wb") as log:
                     self.proc = self._spawn(subprocess.DEVNULL,
@@ -247,8 +256,13 @@ class ChildProcess:
             if self._cancelled:
                 return None
             ticket = self._ticket = StartTicket(self.on_sent)
-        with open(self.log_path, "ab" if self.append else "wb") as log:  # type: ignore[arg-type]
-            proc = self._fork(log, ticket)
+        assert self.launcher is not None and self.log_path is not None
+        if self.echo is None:                    # the launcher opens the log: no file made here
+            proc = self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env, ticket=ticket,
+                                       log_path=os.path.abspath(self.log_path), append=self.append,
+                                       log_folder=self.log_folder)
+        else:
+            proc = self._fork_echoing(ticket)
         self._started_at = time.time()
         with self._lock:
             self._ticket = None
@@ -261,12 +275,11 @@ class ChildProcess:
                 self._cancel_locked(self.grace if self._grace_asked is None else self._grace_asked)
             return proc.pid
 
-    def _fork(self, log: IO[bytes], ticket: StartTicket) -> Any:
-        """Have the launcher fork the command, its output going to ``log`` (or a pipe when echoing)."""
-        assert self.launcher is not None
-        if self.echo is None:
-            return self.launcher.spawn(self.argv, cwd=self.cwd, environment=self.extra_env,
-                                       output_fd=log.fileno(), ticket=ticket)
+    def _fork_echoing(self, ticket: StartTicket) -> Any:
+        """Have the launcher fork the command, its output going to a pipe (copied to the log and the echo)."""
+        assert self.launcher is not None and self.log_path is not None
+        with open(self.log_path, "ab" if self.append else "wb"):
+            pass                                 # made now, as the log of a launched command is
         read_end, write_end = os.pipe()
         stdout = os.fdopen(read_end, "rb")
         try:

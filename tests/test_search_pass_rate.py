@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import json
 import random
+import subprocess
 from pathlib import Path
 
 import pytest
-from batch_fixtures import cli_env, run_cli
+from batch_fixtures import BIN, cli_env, run_cli
 from cli_support import run_variation
 
 from coverage_engine.domains import InputDomain
@@ -118,3 +119,18 @@ def test_a_continuous_axis_is_bisected_to_the_resolution():
     assert found.before.coordinate * 8 <= 5 < found.after.coordinate * 8 + 1e-9
     assert found.after.coordinate - found.before.coordinate <= 0.01 + 1e-9
     assert len(runs) < 101 * 8 / 4, len(runs)        # a fraction of a grid of the resolution's levels
+
+
+@pytest.mark.slow
+def test_scenario_search_runs_the_pass_rate_boundary_to_the_level_the_arithmetic_gives(tmp_path):
+    """The whole loop with --pass-rate/--along: its final estimate is the crossing between noise 5 and 6."""
+    (tmp_path / "sweep.osc").write_text(SWEEP)
+    done = subprocess.run([str(BIN / "scenario_search"), "sweep.osc", "--goal", "boundary", "--pass-rate", "0.5",
+                           "--along", "noise", "--budget", "48", "--round", "8", "--seed", "4", "-j", "2", "-o",
+                           "search"], cwd=tmp_path, env=cli_env(tmp_path), capture_output=True, text=True, timeout=600)
+    assert done.returncode in (0, 1), done.stdout + done.stderr
+    search = json.loads((tmp_path / "search" / SEARCH_FILE).read_text())
+    assert search["settings"]["pass_rate"] == 0.5 and search["settings"]["along"] == "noise"
+    boundary = search["estimate"]["boundary"]
+    assert boundary["axes"] == {"sweep.noise": {"value": 5.5, "error": 0.5, "unit": ""}}, done.stdout
+    assert "noise = 5.5 ± 0.5" in done.stdout

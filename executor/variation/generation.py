@@ -90,34 +90,40 @@ def run(request: VariationRequest) -> int:
         if search is not None and not search.planned.rows:
             return _nothing_proposed(request, search)
         plan, tuples = _choose(parsed, request, options, held, search)
-        report.describe(plan)
-        if request.strategy != "full":
-            echo(_strategy_summary(plan, request, tuples))
-        report.report_rejections(plan)
-        if request.list_only:
-            return report.list_assignments(plan)
-        if plan.rejections:
-            # All or nothing: a typo in one value must not leave a partial set of variants that a
-            # pipeline ignoring the exit code would report as the whole.
-            bad = plan.total - plan.valid_count()
-            echo(f"error: {bad} of {plan.total} combination(s) hold a value that does not resolve; nothing was "
-                 "written (every combination is checked before any file is written: fix the value(s) above)",
-                 err=True)
-            return 1
-        from executor.output.folder_lock import FolderBusy, FolderLock
+        return _report_and_write(plan, request, engine, seed, tuples, search)
 
-        try:
-            lock = FolderLock(request.output_dir, "scenario_variation").acquire(
-                request.wait, on_wait=lambda text: echo(text, err=True))
-        except FolderBusy as exc:
-            raise OutputFolderBusy(f"{exc}; nothing was written", Location.whole_file(str(plan.path))) from None
-        with lock:
-            code = write_variants(plan, request, engine or _open_store(request.store), seed, tuples)
-            if search is not None and code != EXIT_INTERRUPTED:
-                from executor.variation.search import write_estimate
 
-                echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
-            return code
+def _report_and_write(plan: VariationPlan, request: VariationRequest, engine: Engine | None, seed: int | None,
+                      tuples: TupleCoverage | None, search: AdaptiveRound | None) -> int:
+    """Say what was chosen; unless only listing, and all or nothing, write it under the output folder's lock."""
+    report.describe(plan)
+    if request.strategy != "full":
+        echo(_strategy_summary(plan, request, tuples))
+    report.report_rejections(plan)
+    if request.list_only:
+        return report.list_assignments(plan)
+    if plan.rejections:
+        # All or nothing: a typo in one value must not leave a partial set of variants that a
+        # pipeline ignoring the exit code would report as the whole.
+        bad = plan.total - plan.valid_count()
+        echo(f"error: {bad} of {plan.total} combination(s) hold a value that does not resolve; nothing was "
+             "written (every combination is checked before any file is written: fix the value(s) above)",
+             err=True)
+        return 1
+    from executor.output.folder_lock import FolderBusy, FolderLock
+
+    try:
+        lock = FolderLock(request.output_dir, "scenario_variation").acquire(
+            request.wait, on_wait=lambda text: echo(text, err=True))
+    except FolderBusy as exc:
+        raise OutputFolderBusy(f"{exc}; nothing was written", Location.whole_file(str(plan.path))) from None
+    with lock:
+        code = write_variants(plan, request, engine or _open_store(request.store), seed, tuples)
+        if search is not None and code != EXIT_INTERRUPTED:
+            from executor.variation.search import write_estimate
+
+            echo(f"estimate kept in {printable(str(write_estimate(request.output_dir, search.record)))}")
+        return code
 
 
 def _check_adaptive(request: VariationRequest, where: Location) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import sqlite3
 import subprocess
@@ -330,12 +331,15 @@ def test_only_the_single_host_run_holds_jobs_ahead(tmp_path):
 
 def test_a_job_handed_over_ahead_is_timed_from_its_start(tmp_path):
     """The fork server holds the next job until the slot is free; its timeout and time start then."""
-    env = make_variants(tmp_path, ["a", "b", "c"], pause=1.0)
-    done = run_cli(["-i", "out", "-o", "res", "-j", "1", "--timeout", "1.8"], tmp_path, env)
+    # Each job pauses 3 s: one timed from its hand-over (a pause earlier) would run past the 5.5 s timeout,
+    # while a job timed from its start has 2.5 s to spare for a slow machine's start-up.
+    env = make_variants(tmp_path, ["a", "b", "c"], pause=3.0)
+    done = run_cli(["-i", "out", "-o", "res", "-j", "1", "--timeout", "5.5"], tmp_path, env)
     assert done.returncode == 0, done.stdout + done.stderr           # none waited into a timeout
     assert sorted(row[0] for row in records(tmp_path)) == ["a", "b", "c"]
-    durations = [float(line.split()[-2]) for line in done.stdout.splitlines() if " passed " in line and "[" in line]
-    assert len(durations) == 3 and all(0.9 < t < 1.6 for t in durations), done.stdout   # not the wait
+    finished = [line for line in done.stdout.splitlines() if re.match(r"\[\d+/3\] passed ", line)]
+    durations = [float(line.split()[-2]) for line in finished]           # "[1/3] passed    job0  3.05 s"
+    assert len(durations) == 3 and all(2.9 < t < 5.5 for t in durations), done.stdout   # not the wait
 
 
 # A module of the scenario's folder named like one the standard library has (and the entry-point lookup

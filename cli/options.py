@@ -1,4 +1,5 @@
-"""Options and value types that several commands share, defined once: ``--store``, ``-d/--debug``, seconds."""
+"""Options and value types that several commands share, defined once: ``--store``, ``-d/--debug``, seconds,
+and the options of an adaptive search's goal."""
 
 from __future__ import annotations
 
@@ -35,6 +36,34 @@ def debug_option(func: F) -> F:
     """``-d/--debug``: debug output, and tracebacks with error messages."""
     return click.option("-d", "--debug", is_flag=True, is_eager=True, callback=_remember_debug,
                         help="Debug output, and tracebacks of errors.")(func)
+
+
+def goal_options(func: F) -> F:
+    """The options that say what an adaptive round looks for (``scenario_variation --from`` and
+    ``scenario_search`` alike): ``--objective``, ``--maximise``, ``--threshold``, ``--resolution``,
+    ``--pass-rate`` and ``--along``."""
+    from coverage_engine.search import DEFAULT_RESOLUTION
+
+    options = [
+        click.option("--objective", metavar="NAME",
+                     help="falsify: the record() item to minimise, or 'margin' (how close the compare checks came to "
+                          "flipping; the default); boundary with --threshold: the record() item that crosses it."),
+        click.option("--maximise", is_flag=True, help="falsify: maximise the objective instead of minimising it."),
+        click.option("--threshold", type=float, metavar="X",
+                     help="boundary: the record() item of --objective below X counts as failing (instead of the "
+                          "verdict)."),
+        click.option("--resolution", type=click.FloatRange(min=0, max=1, min_open=True), default=DEFAULT_RESOLUTION,
+                     show_default=True, metavar="F", help="boundary: locate it to this fraction of each range."),
+        click.option("--pass-rate", type=click.FloatRange(min=0, max=1, min_open=True), metavar="R",
+                     help="boundary: seek the level of --along KEY where the share of passing runs over the other "
+                          "parameters crosses R (e.g. 0.5), instead of where single runs flip."),
+        click.option("--along", metavar="KEY",
+                     help="boundary with --pass-rate: the varied parameter (its key, or a dotted part of it) whose "
+                          "level is sought."),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
 
 
 #: Longest duration any option accepts: a year. Timers are threads' waits, which fail beyond

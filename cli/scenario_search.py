@@ -17,9 +17,9 @@ from __future__ import annotations
 import click
 
 from cli.boundary import Boundary
-from cli.options import Seconds, debug_option, store_option
+from cli.options import Seconds, debug_option, goal_options, store_option
 from cli.scenario_batch_execution import JobsType
-from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
+from coverage_engine.search import ADAPTIVE
 
 PROG = "scenario_search"
 
@@ -55,19 +55,7 @@ SETTING_OPTIONS = ("scenario", "goal", "budget", "round_size", "seed", "objectiv
               help="Built-in runner: run every job step-based on this simulation.")
 @click.option("--seed", type=click.IntRange(min=0, max=2**62), metavar="S",
               help="Seed of the search (round N draws with S+N-1); chosen and printed when left out.")
-@click.option("--objective", metavar="NAME|margin",
-              help="falsify (and boundary on a measured value): the record() item to minimise, or 'margin'.")
-@click.option("--maximise", is_flag=True, help="falsify: maximise --objective instead of minimising it.")
-@click.option("--threshold", type=float, metavar="X",
-              help="boundary: the value of --objective where pass turns to fail (default: the verdicts).")
-@click.option("--resolution", type=click.FloatRange(min=0, min_open=True, max=1), default=DEFAULT_RESOLUTION,
-              show_default=True, metavar="F", help="boundary: how finely to locate it, as a share of each range.")
-@click.option("--pass-rate", type=click.FloatRange(min=0, max=1, min_open=True), metavar="R",
-              help="boundary: seek the level of --along KEY where the share of passing runs over the other "
-                   "parameters crosses R (e.g. 0.5), instead of where single runs flip.")
-@click.option("--along", metavar="KEY",
-              help="boundary with --pass-rate: the varied parameter (its key, or a dotted part of it) whose level "
-                   "is sought.")
+@goal_options
 @click.option("--resume", is_flag=True,
               help="Continue the search of -o where it stopped (Ctrl-C, a lost machine), with the scenario, goal, "
                    "seed, command and job limits it was started with (a larger --budget runs more rounds).")

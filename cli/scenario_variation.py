@@ -16,8 +16,8 @@ from __future__ import annotations
 import click
 
 from cli.boundary import Boundary
-from cli.options import debug_option, store_option
-from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
+from cli.options import debug_option, goal_options, store_option
+from coverage_engine.search import ADAPTIVE
 from coverage_engine.suffixes import OSC_SUFFIX
 from executor.variation.request import DEFAULT_MAX_VARIANTS, VariationRequest
 from executor.variation.writing import VariationStoreError
@@ -60,21 +60,7 @@ STRATEGIES = ("full", "pairwise", "t-way", "random", "lhs", "halton", "sobol", *
               help="Results folder of earlier runs of the same file (repeatable): boundary, fill-holes and falsify "
                    "propose the next variants from them. With --store on the command line, the batches of that "
                    "store written into these folders are read instead (the folders need not be on this host).")
-@click.option("--objective", metavar="NAME",
-              help="falsify: the record() item to minimise, or 'margin' (how close the compare checks came to "
-                   "flipping; the default); boundary with --threshold: the record() item that crosses it.")
-@click.option("--maximise", is_flag=True, help="falsify: maximise the objective instead of minimising it.")
-@click.option("--threshold", type=float, metavar="X",
-              help="boundary: the record() item of --objective below X counts as failing (instead of the verdict).")
-@click.option("--resolution", type=click.FloatRange(min=0, max=1, min_open=True), default=DEFAULT_RESOLUTION,
-              show_default=True, metavar="F",
-              help="boundary: locate it to this fraction of each range.")
-@click.option("--pass-rate", type=click.FloatRange(min=0, max=1, min_open=True), metavar="R",
-              help="boundary: seek the level of --along KEY where the share of passing runs over the other "
-                   "parameters crosses R (e.g. 0.5), instead of where single runs flip.")
-@click.option("--along", metavar="KEY",
-              help="boundary with --pass-rate: the varied parameter (its key, or a dotted part of it) whose level "
-                   "is sought.")
+@goal_options
 @click.option("--round", "round_number", type=click.IntRange(min=1), metavar="N",
               help="The round written in each variant's proposal line (default: one more than the highest read).")
 @click.argument("scenarios", nargs=-1, required=True, type=click.Path())

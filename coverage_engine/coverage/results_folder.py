@@ -365,19 +365,16 @@ def _search_folder(given: Path, record: SearchRecord, rounds: list[tuple[int, Pa
     collected = combined.search = SearchRuns(record)
 
     def stream() -> Iterator[RunInput]:
-        for number, path, part in parts:
+        for number, _path, part in parts:
             folder = round_folder(number)
             for run in part.runs:
                 run.name = f"{folder}/{run.name}"
                 collected.add(run.name, run.verdict, number, run.assignment)
                 yield run
-            kept = read_search_record(path)
+            kept = part.search.record if part.search is not None else None    # its search.json, read once
             if kept is not None and kept.strategy:
                 collected.name_round(number, kept.strategy)
-            combined.complete = combined.complete and part.complete
-            combined.notes.extend(f"{folder}: {note}" for note in part.notes)
-            combined.warnings.extend(part.warnings)
-            combined.declare(part.domains.values())
+            combined.absorb(part, folder)
         combined.notes.insert(0, f"a search of {len(parts)} round(s): {', '.join(round_folder(n) for n, _ in rounds)}")
 
     combined.runs = stream()
@@ -435,10 +432,7 @@ def read_results_folders(paths: list[str], label: str | None = None) -> RunSourc
     def stream() -> Iterator[RunInput]:
         for path, part in zip(paths, sources, strict=True):
             yield from part.runs
-            combined.complete = combined.complete and part.complete
-            combined.notes.extend(f"{path}: {note}" for note in part.notes)
-            combined.warnings.extend(part.warnings)
-            combined.declare(part.domains.values())
+            combined.absorb(part, path)
         combined.notes.insert(0, f"{len(paths)} results folders merged: {', '.join(Path(p).name for p in paths)}")
 
     combined.runs = stream()

@@ -66,6 +66,14 @@ class RunSource:
     #: The runs of a search by round (a search's folder, or one round's results), else None.
     search: SearchRuns | None = None
 
+    def absorb(self, part: RunSource, prefix: str) -> None:
+        """After ``part``'s runs were read: take in its completeness, notes (each after ``prefix``), warnings
+        and declarations (one source made of several results folders)."""
+        self.complete = self.complete and part.complete
+        self.notes.extend(f"{prefix}: {note}" for note in part.notes)
+        self.warnings.extend(part.warnings)
+        self.declare(part.domains.values())
+
     def declare(self, domains: Iterable[InputDomain]) -> None:
         """Add the declarations of one variation (two generations of a source add up)."""
         for domain in domains:

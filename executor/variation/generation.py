@@ -142,13 +142,17 @@ def _check_adaptive(request: VariationRequest, where: Location) -> None:
 
 def _search(parsed: ParsedVariation, request: VariationRequest, seed: int) -> AdaptiveRound:
     """The adaptive strategy's round: the earlier runs read, the estimate printed, the proposals planned."""
+    from coverage_engine.search.errors import SearchError
+    from coverage_engine.search.propose import SearchOptions
     from executor.variation.search import adaptive_round
 
-    return adaptive_round(parsed, request.from_results, request.strategy, request.samples, seed,
-                          objective=request.objective, maximise=request.maximise, threshold=request.threshold,
-                          resolution=request.resolution, round_number=request.round_number,
-                          results_store=request.store if request.from_store else None,
-                          pass_rate=request.pass_rate, along=request.along)
+    if request.samples is None:
+        raise SearchError(f"--strategy {request.strategy} needs --samples N (how many variants to propose)",
+                          Location.whole_file(str(parsed.path)))
+    options = SearchOptions(request.strategy, request.samples, seed, request.from_results, request.objective,
+                            request.maximise, request.threshold, request.resolution, request.round_number,
+                            request.pass_rate, request.along)
+    return adaptive_round(parsed, options, request.store if request.from_store else None)
 
 
 def _nothing_proposed(request: VariationRequest, search: AdaptiveRound) -> int:

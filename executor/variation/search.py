@@ -24,6 +24,7 @@ from coverage_engine.search.space import Space
 from executor.variation.report import echo
 
 if TYPE_CHECKING:
+    from coverage_engine.search.history import History
     from coverage_engine.search.propose import SearchOptions
     from coverage_engine.variation.plan import ParsedVariation, PlannedVariation
 
@@ -52,33 +53,19 @@ def space_of(parsed: ParsedVariation) -> Space:
     return Space(tuple(axes))
 
 
-def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: str, samples: int | None,
-                   seed: int, *, objective: str | None, maximise: bool, threshold: float | None,
-                   resolution: float, round_number: int | None, results_store: str | None = None, pass_rate: float | None = None,
-                   along: str | None = None) -> AdaptiveRound:
+def adaptive_round(parsed: ParsedVariation, options: SearchOptions,
+                   results_store: str | None = None) -> AdaptiveRound:
     """Read the earlier runs (from the folders, or with ``results_store`` from the batches of that store written
     into them), propose this round's points and plan them as variants; the estimate is printed."""
-    from coverage_engine.search.history import MARGIN, read_history
-    from coverage_engine.search.propose import SearchOptions, propose_round
+    from coverage_engine.search.propose import propose_round
     from coverage_engine.variation.design import design_points
 
-    where = Location.whole_file(str(parsed.path))
-    if samples is None:
-        raise SearchError(f"--strategy {strategy} needs --samples N (how many variants to propose)", where)
+    strategy = options.strategy
     if not parsed.sizes:
         raise SearchError(f"--strategy {strategy} searches over the varied parameters, and {parsed.path.name} "
-                          "varies none", where)
+                          "varies none", Location.whole_file(str(parsed.path)))
     space = space_of(parsed)
-    margins = strategy == "falsify" and objective in (None, MARGIN)
-    if results_store is not None:
-        from executor.variation.stored_results import read_stored_history
-
-        history = read_stored_history(results_store, sources, parsed.path, space.keys, margins=margins)
-    else:
-        history = read_history(sources, parsed.path, space.keys, margins=margins)
-    options = SearchOptions(strategy, samples, seed, sources, objective, maximise, threshold, resolution,
-                            round_number, pass_rate, along)
-    proposal = propose_round(space, history, options)
+    proposal = propose_round(space, _history(parsed, space, options, results_store), options)
     for note in proposal.notes:
         echo(f"note: {note}")
     record = proposal.record
@@ -87,9 +74,9 @@ def adaptive_round(parsed: ParsedVariation, sources: tuple[str, ...], strategy: 
         echo(line)
     columns = [list(column) for column in zip(*proposal.points, strict=True)] if proposal.points \
         else [[] for _ in space.axes]
-    note = f"strategy {strategy}, round {record.round}, {samples} samples, seed {seed}"
-    planned = design_points(parsed, columns, note=note, samples=samples,
-                            proposal=Proposal(record.round, strategy, sources))
+    note = f"strategy {strategy}, round {record.round}, {options.samples} samples, seed {options.seed}"
+    planned = design_points(parsed, columns, note=note, samples=options.samples,
+                            proposal=Proposal(record.round, strategy, options.sources))
     return AdaptiveRound(planned, record)
 
 
@@ -97,15 +84,25 @@ def estimate_only(scenario: Path, options: SearchOptions) -> RoundRecord:
     """What ``options.strategy`` estimates from the runs of ``options.sources`` (results folders of
     ``scenario``'s variants), proposing nothing and printing nothing: the search's estimate after its last
     round."""
-    from coverage_engine.search.history import MARGIN, read_history
     from coverage_engine.search.propose import estimate_round
     from coverage_engine.variation.plan import parse_variation
 
     parsed = parse_variation(scenario)
     space = space_of(parsed)
+    return estimate_round(space, _history(parsed, space, options, None), options)
+
+
+def _history(parsed: ParsedVariation, space: Space, options: SearchOptions, results_store: str | None) -> History:
+    """The earlier runs of ``parsed``'s source in ``options.sources``: results folders, or with
+    ``results_store`` the batches of that store written into them (the margins read only for falsify on it)."""
+    from coverage_engine.search.history import MARGIN, read_history
+
     margins = options.strategy == "falsify" and options.objective in (None, MARGIN)
-    history = read_history(options.sources, parsed.path, space.keys, margins=margins)
-    return estimate_round(space, history, options)
+    if results_store is not None:
+        from executor.variation.stored_results import read_stored_history
+
+        return read_stored_history(results_store, options.sources, parsed.path, space.keys, margins=margins)
+    return read_history(options.sources, parsed.path, space.keys, margins=margins)
 
 
 def write_estimate(output_dir: str, record: RoundRecord) -> Path:

@@ -32,8 +32,9 @@ import subprocess
 import sys
 import tempfile
 import time
-import xml.etree.ElementTree as ET
 from pathlib import Path
+
+from bench_fault_injection_sweep import grid as verdict_cells  # a script beside this one
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
@@ -58,16 +59,14 @@ def run_batch(work: Path, env: dict[str, str], variants: str, results: str, jobs
 
 
 def noise_rates(report: Path) -> dict[float, tuple[int, int]]:
-    """``(passed, runs)`` per noise level, from the merged JUnit report's variation properties."""
+    """``(passed, runs)`` per noise level, from the merged JUnit report's variation properties (the cells
+    bench_fault_injection_sweep reads)."""
     rates: dict[float, tuple[int, int]] = {}
-    for suite in ET.parse(report).getroot().iter("testsuite"):
-        properties = {p.get("name"): p.get("value") for p in suite.iter("property")}
-        noise = properties.get(f"variation.{NOISE}")
-        if noise is None:
+    for (noise, _drop), status in verdict_cells(report).items():
+        if noise == "?":
             continue
-        level = float(noise.strip("'\""))
-        passed, runs = rates.get(level, (0, 0))
-        rates[level] = (passed + (properties.get("status") == "passed"), runs + 1)
+        passed, runs = rates.get(float(noise), (0, 0))
+        rates[float(noise)] = (passed + (status == "passed"), runs + 1)
     return dict(sorted(rates.items()))
 
 

@@ -187,4 +187,5 @@ def search_svg(section: SearchSection) -> str | None:
                      for n in rounds)
     return (frame.svg("search", f"runs of the search over {x_name} and {y_name}, by round")
             + f'<div class="heatlegend">{legend}</div><p class="lead">{len(section.points)} run(s): circles passed, '
-              'squares did not; dashed: the boundary; ringed: the worst case.</p>')
+              'squares did not; dashed: the boundary (a dashed ring: a boundary variant); a solid ring: the '
+              'worst case.</p>')

@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+
+from coverage_engine.limits import read_bounded
 
 #: The prefix of a domain line.
 DOMAIN_PREFIX = "# domain "
@@ -195,13 +196,8 @@ def declared_text(domains: Iterable[InputDomain]) -> str:
 
 def read_declared(path: str) -> list[InputDomain]:
     """The domains of a ``declared.json`` ([] when it is missing, too big or not one); never follows a link."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
-    except OSError:
-        return []
-    with os.fdopen(fd, "rb") as handle:
-        data = handle.read(MAX_DECLARED_BYTES + 1)
-    if len(data) > MAX_DECLARED_BYTES:
+    data = read_bounded(path, MAX_DECLARED_BYTES)
+    if data is None:
         return []
     try:
         document = json.loads(data.decode("utf-8"))

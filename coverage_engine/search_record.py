@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from coverage_engine.limits import read_bounded
 from coverage_engine.proposals import FIRST_ROUND, SEARCH_FILE, SEARCH_FORMAT
 from coverage_engine.results.atomic import write_text_atomically
 
@@ -296,12 +297,12 @@ def parse_search_record(document: object) -> SearchRecord | None:
 
 def read_search_record(folder: str | os.PathLike[str]) -> SearchRecord | None:
     """The ``search.json`` of ``folder`` (a search's folder, a round's variants or results), else None."""
-    path = Path(folder) / SEARCH_FILE
+    data = read_bounded(Path(folder) / SEARCH_FILE, MAX_SEARCH_BYTES)
+    if data is None:
+        return None
     try:
-        if path.is_symlink() or not path.is_file() or path.stat().st_size > MAX_SEARCH_BYTES:
-            return None
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+        document = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
         return None
     return parse_search_record(document)
 

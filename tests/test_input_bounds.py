@@ -61,3 +61,20 @@ def test_pairwise_over_many_values_covers_every_pair(tmp_path):
     seen = {(a, b, row[a], row[b]) for row in (dict(enumerate(part.split(" = ")[1] for part in line.split(", ")))
                                                for line in rows) for a in range(10) for b in range(a + 1, 10)}
     assert len(seen) == 45 * 2500 and 2500 <= len(rows) < 5000
+
+
+def test_a_results_folder_side_file_is_read_only_when_small_regular_and_not_a_link(tmp_path):
+    """declared.json, history.json and search.json are read through one bounded reader: a link is not
+    followed, a FIFO is not waited on, a file over the limit is not read."""
+    from coverage_engine.limits import read_bounded
+
+    (tmp_path / "small.json").write_bytes(b"{}")
+    (tmp_path / "big.json").write_bytes(b"x" * 11)
+    (tmp_path / "link.json").symlink_to(tmp_path / "small.json")
+    os.mkfifo(tmp_path / "fifo.json")
+    assert read_bounded(tmp_path / "small.json", 10) == b"{}"
+    assert read_bounded(tmp_path / "big.json", 10) is None
+    assert read_bounded(tmp_path / "link.json", 10) is None
+    assert read_bounded(tmp_path / "fifo.json", 10) is None
+    assert read_bounded(tmp_path / "missing.json", 10) is None
+    assert read_bounded(tmp_path, 10) is None

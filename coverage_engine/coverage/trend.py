@@ -15,6 +15,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from html import escape
 
+from coverage_engine.limits import read_bounded
+
 #: The file a batch leaves in its results folder with the store's recent batches (the trend of the folder).
 HISTORY_FILE = "history.json"
 
@@ -82,16 +84,8 @@ MAX_HISTORY_BYTES = 4 * 1024 * 1024
 def read_history_file(folder: str) -> tuple[list[TrendPoint], int | None]:
     """The trend a batch left in its results folder (``history.json``); nothing when there is none, it is
     a link, larger than :data:`MAX_HISTORY_BYTES` or not a history document (the report goes on without)."""
-    try:
-        fd = os.open(os.path.join(folder, HISTORY_FILE), os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
-    except OSError:
-        return [], None
-    try:
-        with os.fdopen(fd, "rb") as handle:
-            data = handle.read(MAX_HISTORY_BYTES + 1)
-    except OSError:
-        return [], None
-    if len(data) > MAX_HISTORY_BYTES:
+    data = read_bounded(os.path.join(folder, HISTORY_FILE), MAX_HISTORY_BYTES)
+    if data is None:
         return [], None
     try:
         return read_history_document(data.decode("utf-8"))

@@ -9,8 +9,12 @@
     while the store is away), ``hand_over`` (the fork server, jobs held ahead), ``recorder`` (store writes
     of starts and results, grouped), ``leases`` (heartbeats, sweeps) and ``watchdog`` (a runner that dies
     takes its processes with it).
+``loop_run`` / ``forked_run`` / ``spawned_run`` / ``inbox``
+    one attempt driven by the worker's loop, no thread of its own: a built-in job forked by the fork
+    server, or a launched command started with ``posix_spawn`` and watched through its process
+    descriptor; the loop's inbox waits on both and on the job threads' events.
 ``job_run`` / ``job_folders``
-    one attempt in a thread and the job's own folder.
+    one attempt in a thread (jobs with ``--post-run`` hooks or an echoed output) and the job's own folder.
 ``builtin_runner`` / ``fork_server`` / ``fork_protocol``
     the built-in runner: jobs forked from a server that has imported the runtime once.
 ``verdict``

@@ -125,6 +125,7 @@ class ForkServer:
         self._pending: dict[str, _Pending] = {}
         self._running: dict[str, ForkedProcess] = {}
         self._early: dict[str, int] = {}           # exits that came before the spawner took its process
+        self._replies: dict[str, Callable[[dict], None]] = {}   # submitted requests: who hears of them
         self._ids = itertools.count(1)
         self._alive = False
 
@@ -172,7 +173,6 @@ class ForkServer:
         mine.settimeout(None)
         self._sock = mine
         self._alive = True
-        threading.Thread(target=self._read, name="fork-server-replies", daemon=True).start()
         return self
 
     def spawn(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str],
@@ -221,6 +221,40 @@ class ForkServer:
             process._exited(early)
         return process
 
+    def submit(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], log_path: str,
+               append: bool, log_folder: tuple[str, str] | None, reply: Callable[[dict], None]) -> str:
+        """Send a spawn request without waiting for its start (the worker's own loop, no thread per job);
+        returns the request's id (for :meth:`withdraw`).
+
+        ``reply`` is called from the reader thread with each of the server's messages on the request, in
+        order: ``started`` (``pid``), ``failed`` (``reason``, ``errno``, ``folder``) or ``withdrawn``, then
+        ``exited`` (the raw wait ``status``); ``{"event": "gone"}`` when the server ended before it could
+        say more (a job it had started was killed with it). :class:`ForkServerError` when the request
+        cannot be sent."""
+        request_id = str(next(self._ids))
+        with self._table_lock:
+            self._replies[request_id] = reply
+        request = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment), "log": log_path,
+                   "append": append, "folder": log_folder}
+        with self._lock:
+            try:
+                if not self._alive or self._sock is None:
+                    raise ForkServerError("the built-in runner's fork server has ended")
+                try:
+                    send(self._sock, request)
+                except OSError as exc:
+                    raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+            except ForkServerError:
+                with self._table_lock:
+                    self._replies.pop(request_id, None)
+                raise
+        return request_id
+
+    def withdraw(self, request_id: str) -> None:
+        """Take back a submitted request that still waits for a slot (answered ``withdrawn``, or
+        ``started`` when it had begun: stop that one as any other)."""
+        self._withdraw(request_id)
+
     def _forget(self, request_id: str) -> None:
         with self._table_lock:
             self._pending.pop(request_id, None)
@@ -235,23 +269,44 @@ class ForkServer:
             except OSError:
                 pass                 # the server is gone: the reader fails every pending request
 
-    def _read(self) -> None:
-        """Dispatch the server's replies; when it ends, end its jobs and fail what waits for it."""
-        assert self._sock is not None
-        try:
-            while True:
-                message, _ = receive(self._sock)
-                if message is None:
-                    break
-                self._dispatch(message)
-        except OSError:
-            pass
+    def fileno(self) -> int:
+        """The socket the server's replies come on (readable: call :meth:`poll`); -1 once it is closed."""
+        return -1 if self._sock is None else self._sock.fileno()
+
+    def poll(self) -> bool:
+        """Dispatch every reply the server has sent so far (without waiting); False once it has ended.
+
+        The worker's loop calls this whenever :meth:`fileno` is readable: a job's start and end reach
+        their waiters (a submitted request's ``reply``, a thread blocked in :meth:`spawn` or in its
+        process's ``wait``) through the loop, with no thread of the server's own. When the server
+        ends, its jobs are killed and what waits for it fails.
+        """
+        if self._sock is None:
+            return False
+        while True:
+            try:
+                message, _ = receive(self._sock, flags=socket.MSG_DONTWAIT)
+            except BlockingIOError:
+                return True
+            except OSError:
+                message = None
+            if message is None:
+                self._ended()
+                return False
+            self._dispatch(message)
+
+    def _ended(self) -> None:
+        """The server is gone: kill its jobs, fail the requests that wait for it."""
         self._alive = False
         with self._table_lock:
             pending = list(self._pending.values())
             running = list(self._running.values())
+            replies = list(self._replies.values())
             self._pending.clear()
             self._running.clear()
+            self._replies.clear()
+        for reply in replies:
+            reply({"event": "gone"})
         for item in pending:
             item.reason = "the fork server ended"
             item.event.set()
@@ -264,7 +319,13 @@ class ForkServer:
 
     def _dispatch(self, message: dict) -> None:
         request_id, event = str(message.get("id")), message.get("event")
-        if event in ("started", "failed", "withdrawn"):
+        with self._table_lock:
+            reply = self._replies.get(request_id)
+            if reply is not None and event in ("failed", "withdrawn", "exited"):
+                del self._replies[request_id]          # the last word on it
+        if reply is not None:
+            reply(message)
+        elif event in ("started", "failed", "withdrawn"):
             with self._table_lock:
                 pending = self._pending.pop(request_id, None)
             if pending is not None:
@@ -293,6 +354,7 @@ class ForkServer:
                 pass
             self._sock.close()
             self._sock = None
+            self._ended()                  # nothing waits for a reply that will not come
         self._end_process()
 
     def _end_process(self) -> None:

@@ -59,6 +59,11 @@ class HandOver:
                                       on_scratch=self.on_scratch).start()
         return self._server
 
+    @property
+    def server(self) -> ForkServer | None:
+        """The fork server while one runs (the worker's loop reads its replies), else None."""
+        return self._server if self._server is not None and self._server.alive else None
+
     def close(self) -> None:
         """Stop the fork server (it kills the jobs still running), if there is one."""
         if self._server is not None:

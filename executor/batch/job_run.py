@@ -7,13 +7,12 @@ which writes them. Earlier attempts' logs are kept: before attempt n the previou
 
 from __future__ import annotations
 
-import queue
 import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO
+from typing import BinaryIO, Protocol
 
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
 from executor.batch.builtin_runner import BUILTIN_COMMAND, JobFolderRefused
@@ -31,11 +30,24 @@ from store.jobs import Batch, Job, JobResult
 from store.states import NOT_STARTED_REASON, JobState
 
 
+class Attempt(Protocol):
+    """What the worker and the recorder use of a running attempt: a :class:`JobRun` (a thread) or a
+    :class:`~executor.batch.loop_run.LoopRun` (driven by the worker's loop)."""
+
+    job: Job
+    batch: Batch
+    output_dir: Path
+    lost: bool
+
+    def cancel(self, grace: float | None = None) -> None:
+        """Stop the attempt (SIGINT, SIGKILL after ``grace``); one not started never starts."""
+
+
 @dataclass
 class Started:
     """The child of ``run`` is running with this process id (also its process group id)."""
 
-    run: JobRun
+    run: Attempt
     pid: int
     #: When the child started (``time.monotonic``): the worker writes the record only once it is this old.
     at: float = field(default_factory=time.monotonic)
@@ -47,7 +59,7 @@ class Started:
 class Done:
     """The attempt ended; ``result`` is what to record, ``problems`` the post-run hooks that failed."""
 
-    run: JobRun
+    run: Attempt
     result: JobResult
     problems: list[str] = field(default_factory=list)
 
@@ -94,6 +106,13 @@ def undo_folder(output_dir: Path, kept_log: Path | None, made_folder: bool) -> N
         pass                                     # not empty (someone wrote there): leave it
 
 
+class EventSink(Protocol):
+    """Where a job's thread reports (the worker's :class:`~executor.batch.inbox.Inbox`)."""
+
+    def put(self, event: Started | Done) -> None:
+        """Hand over one event (from the job's thread)."""
+
+
 class StartOrder:
     """Lets jobs hand their start over in the order they were claimed.
 
@@ -138,7 +157,7 @@ class JobRun:
     """
 
     def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str,
-                 events: queue.Queue, *, cwd: str | None = None, echo: BinaryIO | None = None,
+                 events: EventSink, *, cwd: str | None = None, echo: BinaryIO | None = None,
                  environment: Mapping[str, str] | None = None, launcher: Launcher | None = None,
                  made_folder: bool = False, order: tuple[StartOrder, int] | None = None,
                  folder_root: tuple[str, str] | None = None) -> None:
@@ -165,6 +184,10 @@ class JobRun:
 
     def join(self, timeout: float | None = None) -> None:
         self._thread.join(timeout)
+
+    def alive(self) -> bool:
+        """Whether its thread still runs."""
+        return self._thread.is_alive()
 
     def cancel(self, grace: float | None = None) -> None:
         """Interrupt the child or the running post-run hook (SIGINT to its process group, SIGKILL after

@@ -65,7 +65,10 @@ class PlainReporter(Reporter):
             prefix = " " * len(prefix)
         else:
             self.done += 1
-        print(_line(prefix, job, result, retrying), file=self.stream, flush=True)
+        # one write for the line and its end: an echoed child's output (-j 1, another thread) cannot
+        # land between them, as it could between print()'s two writes to an unbuffered stream
+        self.stream.write(_line(prefix, job, result, retrying) + "\n")
+        self.stream.flush()
 
     def warn(self, text: str) -> None:
         print(f"warning: {text}", file=sys.stderr, flush=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from executor.batch.claim_pacing import StoreBackoff
-from executor.batch.job_run import Done, JobRun, Started
+from executor.batch.job_run import Attempt, Done, Started
 from executor.batch.progress import Reporter
 from executor.batch.repeats import later_attempts
 from executor.batch.verdict import DISK_FULL_REASON
@@ -91,7 +91,7 @@ class ResultRecorder:
     def __len__(self) -> int:
         return len(self._starts) + len(self._results) + len(self._to_halt)
 
-    def unwritten(self) -> dict[int, JobRun]:
+    def unwritten(self) -> dict[int, Attempt]:
         """The runs whose result waits here, by job id (the worker still holds those jobs in the store)."""
         return {done.run.job.id: done.run for _, done in self._results}
 

@@ -62,6 +62,10 @@ class FileMark:
         return FileMark.of(path).signature not in (None, self.signature)
 
 
+#: Buffer of the reader of a child's file.
+_READ_BUFFER = 64 * 1024
+
+
 class NotARegularFile(OSError):
     """A file a child left that is a symbolic link or not a regular file (never followed, never read)."""
 
@@ -73,7 +77,8 @@ def open_child_file(path: Path) -> BinaryIO:
     if not stat.S_ISREG(os.fstat(fd).st_mode):
         os.close(fd)
         raise NotARegularFile(f"{path.name} is not a regular file")
-    return os.fdopen(fd, "rb")
+    # a buffer size given: no second fstat for the block size, no terminal check (a regular file)
+    return os.fdopen(fd, "rb", buffering=_READ_BUFFER)
 
 
 def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:

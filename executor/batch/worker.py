@@ -9,7 +9,7 @@ No SQL here and no policy of its own: each part has one job and is tested alone.
 * :mod:`executor.batch.leases`: heartbeats, and taking back the jobs of dead or silent holders;
 * :mod:`executor.batch.watchdog`: every process this worker starts dies with it, even after ``kill -9``.
 
-Only this loop's thread talks to the store; job threads report through a queue. A job's slot frees
+Only this loop's thread talks to the store; job threads report through its inbox (:mod:`executor.batch.inbox`). A job's slot frees
 when the job ends; its result waits in the recorder until the store accepts it (backing off while
 the store is unreachable), so a finished result is never dropped because of a lost connection. The
 single-host run is this loop scoped to one batch.
@@ -17,9 +17,9 @@ single-host run is this loop scoped to one batch.
 
 from __future__ import annotations
 
+import functools
 import gc
 import hashlib
-import queue
 import threading
 import time
 from collections import deque
@@ -30,16 +30,21 @@ from typing import BinaryIO
 
 from executor.batch.builtin_runner import ForkServerError
 from executor.batch.claim_pacing import ClaimPacer, StoreBackoff
+from executor.batch.forked_run import ForkedRun, Reply
 from executor.batch.hand_over import HandOver
+from executor.batch.inbox import Inbox
 from executor.batch.job_folders import JobFolders
 from executor.batch.job_run import Done, JobRun, Started
 from executor.batch.leases import LeaseKeeper
+from executor.batch.loop_run import LoopRun
 from executor.batch.progress import Reporter
 from executor.batch.recorder import STARTED_RECORD_AFTER, RecorderHooks, ResultRecorder, WorkerSummary
 from executor.batch.repeats import attempt_environment
+from executor.batch.spawned_run import SpawnedRun, loop_can_spawn
 from executor.batch.verdict import disk_full_result, launch_failure
 from executor.batch.watchdog import Watchdog
 from executor.children.process import RUNNER_ENV, disk_full
+from executor.children.spawn import can_spawn_logged
 from store.database import StoreError
 from store.jobs import Batch, Job, WorkerIdentity
 from store.queue import DEFAULT_LEASE, DEFAULT_MAX_LOST, QueueStore, StoreUnavailable
@@ -92,8 +97,10 @@ class Worker:
             stopping=self._stop_is_set), self.summary,
             # -j 1, and a worker of a shared queue (other hosts act on its records): each result at once
             at_once=settings.slots == 1 or not settings.hand_over_ahead)
-        self._events: queue.Queue[Started | Done] = queue.Queue()
-        self._runs: dict[int, JobRun] = {}             # jobs started and not ended
+        self._events: Inbox[Started | Done | Reply] = Inbox()
+        self._runs: dict[int, JobRun | LoopRun] = {}   # jobs started and not ended
+        self._driven: dict[int, LoopRun] = {}          # those of them the loop drives (see loop_run)
+        self._can_spawn: bool | None = None            # launched commands may be SpawnedRuns (decided once)
         self._waiting: deque[Job] = deque()            # jobs claimed in a chunk, not started yet
         self._batches: dict[int, Batch] = {}
         self._stop = threading.Event()
@@ -130,14 +137,25 @@ class Worker:
         except BaseException:
             for run in list(self._runs.values()):
                 run.cancel(grace=0)
-            for run in list(self._runs.values()):
-                run.join(timeout=5.0)
+            self._let_threads_end(5.0)
             raise
         finally:
             gc.unfreeze()                        # a later loop in this process freezes afresh
             self.hand_over.close()
+            self._events.close()
             if watchdog is not None:
                 watchdog.release()
+
+    def _let_threads_end(self, seconds: float) -> None:
+        """Give the job threads up to ``seconds`` to end, reading the fork server's replies meanwhile
+        (a thread of a built-in job waits for them)."""
+        end = time.monotonic() + seconds
+        for run in list(self._runs.values()):
+            while run.alive() and time.monotonic() < end:
+                if self.hand_over.server is None:
+                    run.join(0.05)
+                else:
+                    self._events.wait(0.05, self._watched())
 
     @property
     def mark(self) -> str:
@@ -149,6 +167,7 @@ class Worker:
         stopped_at: float | None = None
         while True:
             now = time.monotonic()
+            self._tick_driven(now)
             ready = self.backoff.ready(now)
             if ready:
                 self.recorder.flush(now, force=self._stop.is_set())
@@ -264,22 +283,44 @@ class Worker:
             except ForkServerError as exc:
                 problem = str(exc)
         order = self.hand_over.order
-        run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
-                     environment={RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)},
-                     launcher=launcher, made_folder=made_folder, folder_root=folder_root,
-                     order=(order, order.take()))
+        environment = {RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)}
+        run: JobRun | LoopRun
+        turn = (order, order.take())
+        if problem is None and launcher is not None and folder_root is not None and not batch.options.post_run:
+            run = self._driven[job.id] = ForkedRun(job, batch, output_dir, scenario, launcher, self._events.put,
+                                                   cwd=self.settings.cwd, environment=environment,
+                                                   folder_root=folder_root, order=turn)
+        elif problem is None and batch.command and echo is None and not batch.options.post_run \
+                and self._spawning_allowed():
+            run = self._driven[job.id] = SpawnedRun(job, batch, output_dir, scenario, environment=environment,
+                                                    order=turn)
+        else:
+            run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
+                         environment=environment, launcher=launcher, made_folder=made_folder,
+                         folder_root=folder_root, order=turn)
         self._runs[job.id] = run
         self._started += 1
         if problem is None:
             try:
-                run.start()
+                if isinstance(run, LoopRun):
+                    for event in run.start():
+                        self._events.put(event)
+                else:
+                    run.start()
                 return
             except RuntimeError as exc:           # no thread could be started
                 problem = f"cannot start the job: {exc}"
         run.pass_turn()                           # it never starts: the next job need not wait for it
+        self._driven.pop(job.id, None)
         ended = time.time()
         self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
                               else launch_failure(output_dir, began, ended, problem)))
+
+    def _spawning_allowed(self) -> bool:
+        """Whether launched commands run as :class:`SpawnedRun` here (posix_spawn and process descriptors, in our folder)."""
+        if self._can_spawn is None:
+            self._can_spawn = loop_can_spawn() and can_spawn_logged(self.settings.cwd)
+        return self._can_spawn
 
     def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
         """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""
@@ -348,27 +389,56 @@ class Worker:
         due = self.recorder.due()
         if due is not None:                       # wake when a held write is due (and may be written)
             timeout = max(0.0, min(timeout, max(due, self.backoff.retry_at) - now))
-        try:
-            event = self._events.get(timeout=timeout) if timeout else self._events.get_nowait()
-        except queue.Empty:
-            return
-        self._add(event)
-        while True:
-            try:
-                self._add(self._events.get_nowait())
-            except queue.Empty:
-                break
+        deadline = self._driven_due()
+        if deadline is not None:                  # a timeout, a grace, a signalled group to watch
+            timeout = max(0.0, min(timeout, deadline - now))
+        self._events.wait(timeout, self._watched())
+        for event in self._events.take():
+            self._add(event)
 
-    def _add(self, event: Started | Done) -> None:
-        """A start or an end: shown, and handed to the recorder; an ended job leaves its slot.
+    def _watched(self) -> dict[int, Callable[[], object]]:
+        """What the loop waits on besides its inbox: the fork server's replies, the launched children's ends."""
+        watched: dict[int, Callable[[], object]] = {}
+        server = self.hand_over.server
+        if server is not None:
+            watched[server.fileno()] = server.poll
+        for run in self._driven.values():
+            if isinstance(run, SpawnedRun) and run.fileno() >= 0:
+                watched[run.fileno()] = functools.partial(self._readable, run)
+        return watched
+
+    def _readable(self, run: SpawnedRun) -> None:
+        for event in run.on_readable():
+            self._events.put(event)
+
+    def _driven_due(self) -> float | None:
+        times = [t for t in (run.due() for run in self._driven.values()) if t is not None]
+        return min(times) if times else None
+
+    def _tick_driven(self, now: float) -> None:
+        """Timeouts and grace periods of the jobs the loop drives (see :mod:`executor.batch.loop_run`)."""
+        due = self._driven_due()
+        if due is not None and due <= now:
+            for run in list(self._driven.values()):
+                for event in run.tick(now):
+                    self._add(event)
+
+    def _add(self, event: Started | Done | Reply) -> None:
+        """A start or an end: shown, and handed to the recorder; an ended job leaves its slot. A reply of
+        the fork server on a job the loop drives becomes such events first.
 
         The display counts a job as running from its start (a job handed to the fork server ahead
         waits for a slot), or from its result when it never started."""
+        if isinstance(event, Reply):
+            for made in event.run.on_reply(event.message):
+                self._add(made)
+            return
         job = event.run.job
         if isinstance(event, Started) or job.id not in self._shown_running:
             self._shown_running.add(job.id)
             self.reporter.job_started(job)
         if isinstance(event, Done):
             self._runs.pop(job.id, None)
+            self._driven.pop(job.id, None)
             self._shown_running.discard(job.id)
         self.recorder.add(event, time.monotonic())

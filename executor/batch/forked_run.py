@@ -1,0 +1,99 @@
+"""A built-in job the worker's loop drives: its child forked by the fork server (see :mod:`executor.batch.loop_run`).
+
+The request goes out with :meth:`ForkServer.submit <executor.batch.builtin_runner.ForkServer.submit>`;
+the server makes the job's folder and opens its log as the job starts, and tells of the start and
+the end. Its replies are read by the worker's loop and reach the run as :class:`Reply` events.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from coverage_engine.results.files import LOG_FILE
+from executor.batch.builtin_runner import BUILTIN_COMMAND, ForkServer
+from executor.batch.job_run import Done, StartOrder, job_marker, undo_folder
+from executor.batch.launch_template import substitute
+from executor.batch.loop_run import Events, LoopRun
+from executor.batch.verdict import disk_full_result, launch_failure
+from executor.children.process import DISK_FULL_ERRNOS, JOB_ENV, kill_group
+from store.jobs import Batch, Job, JobResult
+from store.states import NOT_STARTED_REASON, JobState
+
+
+@dataclass(frozen=True)
+class Reply:
+    """A message of the fork server on ``run``'s request, handed to the worker's loop."""
+
+    run: ForkedRun
+    message: dict
+
+
+class ForkedRun(LoopRun):
+    """One built-in attempt: its request to the fork server, then the server's replies."""
+
+    def __init__(self, job: Job, batch: Batch, output_dir: Path, scenario_path: str, server: ForkServer,
+                 deliver: Callable[[Reply], None], *, cwd: str | None, environment: Mapping[str, str],
+                 folder_root: tuple[str, str], order: tuple[StartOrder, int] | None = None) -> None:
+        super().__init__(job, batch, output_dir, scenario_path, cwd=cwd, environment=environment, order=order)
+        self.server = server
+        self.deliver = deliver
+        self.folder_root = folder_root
+        self._request: str | None = None
+
+    def _launch(self) -> Events:
+        options = self.batch.options
+        builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
+        launch = substitute(builtin, self.scenario_path, str(self.output_dir))
+        environment = {**self.environment, **dict(launch.environment),
+                       JOB_ENV: job_marker(self.job.id, self.job.attempts)}
+        self._request = self.server.submit(launch.argv, cwd=self.cwd, environment=environment,
+                                           log_path=os.path.abspath(self.output_dir / LOG_FILE), append=False,
+                                           log_folder=self.folder_root, reply=self._reply)
+        return []
+
+    def _reply(self, message: dict) -> None:
+        """From the fork server's reader (the worker's loop): on to the loop's events."""
+        self.deliver(Reply(self, message))
+
+    def on_reply(self, message: dict) -> Events:
+        """The events one reply of the server makes."""
+        event = message.get("event")
+        if self._finished:
+            return []
+        if event == "started":
+            return self._on_started(int(message["pid"]))
+        if event == "exited":
+            return self._on_exited(os.waitstatus_to_exitcode(int(message["status"])))
+        if event == "withdrawn":
+            return [self._not_started()]
+        if event == "failed":
+            return [self._failed(message)]
+        if self.pid is None:                       # "gone" before the start
+            return [self._failed({"reason": "the fork server ended"})]
+        kill_group(self.pid)                       # its parent is gone: nobody else can wait for it
+        return self._on_exited(-signal.SIGKILL)
+
+    def _failed(self, message: dict) -> Done:
+        now = time.time()
+        reason = str(message.get("reason"))
+        if message.get("errno") in DISK_FULL_ERRNOS:
+            return self._done(disk_full_result(self.output_dir, now, now))
+        what = reason if message.get("folder") else \
+            f"cannot start the launch command: the built-in runner could not start the job: {reason}"
+        return self._done(launch_failure(self.output_dir, now, now, what))
+
+    def _not_started(self) -> Done:
+        if not self.lost:                          # (a lost job's folder may be its next attempt's already)
+            undo_folder(self.output_dir, self._kept_log, False)
+        now = time.time()
+        return self._done(JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
+                                    output_dir=str(self.output_dir)))
+
+    def _take_back(self) -> None:
+        if self._request is not None:
+            self.server.withdraw(self._request)

@@ -1,0 +1,150 @@
+"""Attempts the worker's loop drives without a thread (executor.batch.loop_run), each alone with real children.
+
+A launched command (SpawnedRun) is started with posix_spawn and its end read from its process descriptor;
+the loop here is the worker's own wait (Inbox.wait on the run's descriptor and its deadlines). The built-in
+kind (ForkedRun) is driven through the real CLI in test_batch_builtin.py.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Iterator
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from executor.batch.inbox import Inbox
+from executor.batch.job_run import Done, Started
+from executor.batch.spawned_run import SpawnedRun, loop_can_spawn
+from store.jobs import Batch, BatchOptions, JobSpec, WorkerIdentity
+from store.queue import QueueStore
+from store.states import NOT_STARTED_REASON, JobState
+
+pytestmark = pytest.mark.skipif(not loop_can_spawn(), reason="no posix_spawn or pidfd_open here")
+
+#: A job writing a passing one-testcase report into its folder.
+PASSING = ('echo "<testsuite><testcase name=\\"t\\"/></testsuite>" > "$2/test.xml"',)
+
+
+@pytest.fixture
+def store(tmp_path: Path) -> Iterator[QueueStore]:
+    opened = QueueStore.open(f"sqlite:///{tmp_path / 'store.db'}")
+    yield opened
+    opened.close()
+
+
+def _run(store: QueueStore, tmp_path: Path, script: str, **options: object) -> SpawnedRun:
+    """A claimed job whose command is ``sh -c script sh {SCENARIO} {OUTPUT_DIR}``, its folder made."""
+    batch: Batch = store.create_batch(
+        mode="local", input_dir=str(tmp_path), output_dir=str(tmp_path / "res"), host="h",
+        command=("sh", "-c", script, "sh", "{SCENARIO}", "{OUTPUT_DIR}"), options=BatchOptions(**options),
+        specs=[JobSpec("j0", str(tmp_path / "j0.sce"), "0" * 64, "x")])
+    (job,) = store.claim(WorkerIdentity.current(), limit=1, batch_id=batch.id)
+    folder = tmp_path / "res" / job.name
+    folder.mkdir(parents=True)
+    return SpawnedRun(job, batch, folder, job.scenario_path, environment={})
+
+
+def inbox_put(inbox: Inbox, run: SpawnedRun):
+    """What the worker does when the run's descriptor is readable: its events into the inbox."""
+    return lambda: [inbox.put(event) for event in run.on_readable()]
+
+
+def living_members(pgid: int, within: float = 5.0) -> list[int]:
+    """Processes of group ``pgid`` still alive after up to ``within`` seconds (SIGKILL is delivered when
+    the process next runs; a killed orphan may stay a zombie until init reaps it)."""
+    end = time.monotonic() + within
+    while True:
+        found = _members(pgid)
+        if not found or time.monotonic() > end:
+            return found
+        time.sleep(0.02)
+
+
+def _members(pgid: int) -> list[int]:
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                fields = Path(f"/proc/{entry}/stat").read_bytes().rsplit(b")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[2]) == pgid and fields[0] != b"Z":
+                found.append(int(entry))
+    return found
+
+
+def _drive(run: SpawnedRun, first: list, *, within: float = 20.0, cancel_after: float | None = None,
+           grace: float | None = None) -> tuple[list[Started], Done]:
+    """The worker loop's part for one run: wait on its descriptor and deadlines until its Done comes."""
+    inbox: Inbox = Inbox()
+    started, begun = [e for e in first if isinstance(e, Started)], time.monotonic()
+    done = [e for e in first if isinstance(e, Done)]
+    try:
+        while not done:
+            now = time.monotonic()
+            assert now - begun < within, "the run never ended"
+            if cancel_after is not None and now - begun >= cancel_after:
+                run.cancel(grace)
+                cancel_after = None
+            events = run.tick(now)
+            due = run.due()
+            timeout = 0.05 if due is None else max(0.0, min(0.05, due - now))
+            inbox.wait(timeout, {run.fileno(): inbox_put(inbox, run)} if run.fileno() >= 0 else {})
+            events += inbox.take()
+            started += [e for e in events if isinstance(e, Started)]
+            done += [e for e in events if isinstance(e, Done)]
+    finally:
+        inbox.close()
+    assert len(done) == 1
+    return started, done[0]
+
+
+def test_a_launched_command_runs_and_is_judged_by_the_loop(store, tmp_path):
+    run = _run(store, tmp_path, PASSING[0])
+    started, done = _drive(run, run.start())
+    assert [event.pid for event in started] == [run.pid]
+    assert done.result.status is JobState.PASSED and done.result.exit_code == 0
+    assert "<testcase" in (done.result.junit_xml or "")
+    assert run.fileno() == -1                       # its process descriptor is closed once it ended
+    with pytest.raises(ChildProcessError):
+        os.waitpid(run.pid, os.WNOHANG)             # reaped by the run, no zombie left
+
+
+def test_a_launched_command_past_its_timeout_gets_sigterm_then_sigkill(store, tmp_path):
+    # SIGTERM is ignored: only the SIGKILL after the grace ends it; a grandchild in its group dies too
+    run = _run(store, tmp_path, "trap '' TERM; sleep 60 & sleep 60", timeout=0.3, grace=0.3)
+    begun = time.monotonic()
+    _, done = _drive(run, run.start())
+    assert done.result.status is JobState.TIMEOUT and done.result.reason == "timed out after 0.3 s"
+    assert time.monotonic() - begun >= 0.55          # the timeout, then the whole grace
+    assert living_members(run.pid) == []
+
+
+def test_a_cancelled_launched_command_gets_sigint_then_its_grace(store, tmp_path):
+    run = _run(store, tmp_path, "trap 'echo stopping; exit 3' INT; while :; do sleep 0.05; done")
+    _, done = _drive(run, run.start(), cancel_after=0.3, grace=5.0)
+    assert done.result.status is JobState.CANCELLED
+    assert "stopping" in (tmp_path / "res" / "j0" / "log.txt").read_text()   # it had its say
+    assert living_members(run.pid) == []
+
+
+def test_a_command_that_cannot_start_ends_with_a_launch_failure(store, tmp_path):
+    run = _run(store, tmp_path, "true")
+    run.batch = replace(run.batch, command=("no-such-command-here", "{SCENARIO}"))
+    events = run.start()
+    assert len(events) == 1 and isinstance(events[0], Done)
+    assert events[0].result.status is JobState.ERROR
+    assert events[0].result.reason.startswith("cannot start the launch command: ")
+    assert run.due() is None and run.tick(time.monotonic()) == []
+
+
+def test_a_cancel_before_the_start_is_kept_and_acted_on_at_once(store, tmp_path):
+    run = _run(store, tmp_path, "sleep 60")
+    run.cancel(grace=0)                               # before start(): remembered
+    begun = time.monotonic()
+    _, done = _drive(run, run.start())
+    assert done.result.status is JobState.CANCELLED and done.result.reason != NOT_STARTED_REASON
+    assert time.monotonic() - begun < 10             # killed at once, not after the sleep

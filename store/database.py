@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import time
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +27,7 @@ from sqlalchemy import (
     text,
 )
 from sqlalchemy.engine import make_url
-from sqlalchemy.exc import ArgumentError, SQLAlchemyError
+from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 
 from coverage_engine.errors import UserError
 
@@ -242,32 +243,51 @@ def check_tables(conn: Connection, shown: str) -> None:
                              f"{', '.join(missing)}; nothing was run (use a new store, --store)")
 
 
+#: Tries of the schema check when the connection is lost during it (a database restarting, an
+#: administrator ending sessions); a store that cannot be reached at all fails at once.
+SCHEMA_TRIES = 4
+
+
 def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
     """Create missing tables (all, or just ``tables``) and refuse a store made by an incompatible version.
 
     Safe when several processes open a fresh store at once: everything runs in one transaction that
     holds an advisory lock on PostgreSQL and the write lock on SQLite, so "create if missing" cannot race.
+    A connection lost during that transaction (it changed nothing: it is rolled back) is tried again, a
+    little later, up to :data:`SCHEMA_TRIES` times: a worker started while its database drops sessions
+    waits for it as it would once running.
     """
-    try:
-        with engine.begin() as conn:
-            if conn.dialect.name == "postgresql":
-                conn.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": _SCHEMA_LOCK_KEY})
-            check_tables(conn, engine.url.render_as_string(hide_password=True))
-            store_meta.create(conn, checkfirst=True)
-            row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
-            if row is None:
-                conn.execute(store_meta.insert().values(key="schema", value=STORE_MARK,
-                                                        schema_version=SCHEMA_VERSION))
-            elif row[0] in UPGRADABLE_FROM:
-                conn.execute(store_meta.update().where(store_meta.c.key == "schema")
-                             .values(schema_version=SCHEMA_VERSION))
-            elif row[0] != SCHEMA_VERSION:
-                raise StoreError(
-                    f"the store at {engine.url.render_as_string(hide_password=True)} has schema version {row[0]}, "
-                    f"this release reads version {SCHEMA_VERSION}; use a new store (--store) or a matching release")
-            metadata.create_all(conn, tables=tables, checkfirst=True)
-    except StoreError:
-        raise
-    except SQLAlchemyError as exc:
-        raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"
-                         ) from exc
+    for attempt in range(SCHEMA_TRIES):
+        connected = False
+        try:
+            with engine.begin() as conn:
+                connected = True
+                _ensure_schema_in(conn, engine, tables)
+            return
+        except StoreError:
+            raise
+        except SQLAlchemyError as exc:
+            lost = connected and isinstance(exc, DBAPIError) and exc.connection_invalidated
+            if lost and attempt + 1 < SCHEMA_TRIES:
+                time.sleep(0.1 * 2 ** attempt)
+                continue
+            raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"
+                             ) from exc
+
+
+def _ensure_schema_in(conn: Connection, engine: Engine, tables: list[Table] | None) -> None:
+    """:func:`ensure_schema`'s transaction."""
+    if conn.dialect.name == "postgresql":
+        conn.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": _SCHEMA_LOCK_KEY})
+    check_tables(conn, engine.url.render_as_string(hide_password=True))
+    store_meta.create(conn, checkfirst=True)
+    row = conn.execute(select(store_meta.c.schema_version).where(store_meta.c.key == "schema")).first()
+    if row is None:
+        conn.execute(store_meta.insert().values(key="schema", value=STORE_MARK, schema_version=SCHEMA_VERSION))
+    elif row[0] in UPGRADABLE_FROM:
+        conn.execute(store_meta.update().where(store_meta.c.key == "schema").values(schema_version=SCHEMA_VERSION))
+    elif row[0] != SCHEMA_VERSION:
+        raise StoreError(
+            f"the store at {engine.url.render_as_string(hide_password=True)} has schema version {row[0]}, "
+            f"this release reads version {SCHEMA_VERSION}; use a new store (--store) or a matching release")
+    metadata.create_all(conn, tables=tables, checkfirst=True)

@@ -11,6 +11,8 @@ import sqlite3
 
 from coverage_support import BIN, run
 
+pytest_plugins = ["batch_stores"]            # the pg_url fixture (a fresh PostgreSQL database)
+
 HELLO = 'import osc.helpers\nscenario s:\n    do serial:\n        log("x")\n'
 VARIED = ('import osc.helpers\nscenario v:\n    speed: float = 1.0\n    keep(speed in [1.0, 2.0])\n'
           '    do serial:\n        log(speed)\n')
@@ -92,3 +94,31 @@ def test_the_stepped_range_message_does_not_recommend_the_strategy_used(tmp_path
                "--store", f"sqlite:///{tmp_path / 'v.db'}", cwd=tmp_path, check=False)
     assert done.returncode == 1 and "this range lists 1,000,001 values" in done.stderr, done.stderr
     assert "write real ends without a step" in done.stderr
+
+
+def test_a_connection_lost_while_the_schema_is_checked_is_tried_again(pg_url):
+    """A worker started while its database ends sessions (a restart, an administrator) waits for it:
+    the schema check's transaction, cut off by the server, is run again on a new connection."""
+    import psycopg
+    from sqlalchemy import event, text
+
+    from store.database import ensure_schema, open_engine
+    from store.queue_tables import QUEUE_TABLES
+
+    engine = open_engine(pg_url)
+    cut = []
+
+    @event.listens_for(engine, "begin")
+    def end_the_first_session(conn):         # the server ends the session under the first transaction
+        if not cut:
+            pid = conn.exec_driver_sql("SELECT pg_backend_pid()").scalar()
+            with psycopg.connect(pg_url.replace("postgresql+psycopg://", "postgresql://"), autocommit=True) as admin:
+                cut.append(admin.execute("SELECT pg_terminate_backend(%s)", (pid,)).fetchone()[0])
+
+    try:
+        ensure_schema(engine, QUEUE_TABLES)
+        with engine.connect() as conn:
+            assert conn.execute(text("SELECT count(*) FROM jobs")).scalar() == 0
+    finally:
+        engine.dispose()
+    assert cut == [True]

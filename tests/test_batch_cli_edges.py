@@ -4,13 +4,15 @@ misspelt subcommands and --version (issues 22 and 17)."""
 from __future__ import annotations
 
 import os
+import re
+import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
-from batch_fixtures import child_command, cli_env, run_cli, write_child, write_scenarios
+from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
 
 from executor.batch.errors import BadCommand
 from executor.batch.inputs import check_command
@@ -133,3 +135,31 @@ def test_jobs_auto_counts_only_the_cpus_the_process_may_use(tmp_path):
     took = time.monotonic() - start
     assert done.returncode == 0, done.stdout + done.stderr
     assert took >= 2.0, f"four 0.5 s jobs took {took:.2f} s on one CPU: they ran side by side"
+
+
+def test_ctrl_c_on_jobs_that_ignore_it_ends_by_their_timeout_and_leaves_no_process(tmp_path):
+    """Launched jobs that ignore SIGINT, each with a process of its group beside it: a Ctrl-C gives them
+    the --grace of 6 s, but their --timeout of 2 s comes first and ends them (SIGTERM); the verdict is the
+    timeout, the run ends then, not after the grace, and nothing of the jobs' groups is left."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("a", "b"):
+        (folder / f"{name}.sce").write_text("")
+    script = ("trap '' INT; (exec sleep 60) & echo $! > \"$2/grandchild\"; echo ready; "
+              "while :; do sleep 0.05; done")
+    runner = start_cli(["-i", "in", "-o", "res", "-j", "2", "--timeout", "2", "--grace", "6", "--", "sh", "-c",
+                        script, "sh", "{SCENARIO}", "{OUTPUT_DIR}"], tmp_path, cli_env(tmp_path))
+    deadline = time.monotonic() + 60
+    logs = [tmp_path / "res" / name / "log.txt" for name in ("a", "b")]
+    while not all(log.exists() and "ready" in log.read_text() for log in logs):
+        assert time.monotonic() < deadline and runner.poll() is None
+        time.sleep(0.02)
+    stopped = time.monotonic()
+    runner.send_signal(signal.SIGINT)
+    out = runner.communicate(timeout=60)[0]
+    assert runner.returncode == 130, out
+    assert time.monotonic() - stopped < 6, out       # by the timeout's grace, not the cancel's 6 s
+    assert re.findall(r"^\[\d/2\] (\w+) ", out, re.M) == ["timeout", "timeout"], out
+    for name in ("a", "b"):
+        grandchild = int((tmp_path / "res" / name / "grandchild").read_text())
+        assert not alive(grandchild), f"{name}'s grandchild outlived its job"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 
@@ -76,36 +76,61 @@ def _members(pgid: int) -> list[int]:
     return found
 
 
-def _drive(run: SpawnedRun, first: list, *, within: float = 20.0, cancel_after: float | None = None,
-           grace: float | None = None) -> tuple[list[Started], Done]:
-    """The worker loop's part for one run: wait on its descriptor and deadlines until its Done comes."""
+class Driven:
+    """How a run went under the loop: its events and how many times the loop waited."""
+
+    def __init__(self) -> None:
+        self.started: list[Started] = []
+        self.done: list[Done] = []
+        self.waits = 0
+
+
+def _drive(run: SpawnedRun, first: list, *, within: float = 20.0,
+           cancels: list[tuple[Callable[[], bool], float]] = ()) -> Driven:
+    """The worker loop's part for one run: wait on its descriptor and deadlines until its Done comes;
+    ``cancels``: (when, grace) pairs, each acted on once its ``when`` says so."""
     inbox: Inbox = Inbox()
-    started, begun = [e for e in first if isinstance(e, Started)], time.monotonic()
-    done = [e for e in first if isinstance(e, Done)]
+    driven, begun = Driven(), time.monotonic()
+    events, pending = list(first), list(cancels)
     try:
-        while not done:
+        while True:
+            driven.started += [e for e in events if isinstance(e, Started)]
+            driven.done += [e for e in events if isinstance(e, Done)]
+            if driven.done:
+                break
             now = time.monotonic()
             assert now - begun < within, "the run never ended"
-            if cancel_after is not None and now - begun >= cancel_after:
-                run.cancel(grace)
-                cancel_after = None
-            events = run.tick(now)
+            while pending and pending[0][0]():
+                run.cancel(pending.pop(0)[1])
+            due = run.due()                             # as the worker: a tick only when one is due
+            events = run.tick(now) if due is not None and due <= now else []
             due = run.due()
-            timeout = 0.05 if due is None else max(0.0, min(0.05, due - now))
+            timeout = 0.2 if due is None else max(0.0, min(0.2, due - now))
             inbox.wait(timeout, {run.fileno(): inbox_put(inbox, run)} if run.fileno() >= 0 else {})
+            driven.waits += 1
             events += inbox.take()
-            started += [e for e in events if isinstance(e, Started)]
-            done += [e for e in events if isinstance(e, Done)]
     finally:
         inbox.close()
-    assert len(done) == 1
-    return started, done[0]
+    assert len(driven.done) == 1
+    return driven
+
+
+def after(seconds: float) -> Callable[[], bool]:
+    begun = time.monotonic()
+    return lambda: time.monotonic() - begun >= seconds
+
+
+def logged(run: SpawnedRun, text: str) -> Callable[[], bool]:
+    """True once the job's log holds ``text`` (the job says it is ready for what the test does next)."""
+    log = run.output_dir / "log.txt"
+    return lambda: log.exists() and text in log.read_text()
 
 
 def test_a_launched_command_runs_and_is_judged_by_the_loop(store, tmp_path):
     run = _run(store, tmp_path, PASSING[0])
-    started, done = _drive(run, run.start())
-    assert [event.pid for event in started] == [run.pid]
+    driven = _drive(run, run.start())
+    done = driven.done[0]
+    assert [event.pid for event in driven.started] == [run.pid]
     assert done.result.status is JobState.PASSED and done.result.exit_code == 0
     assert "<testcase" in (done.result.junit_xml or "")
     assert run.fileno() == -1                       # its process descriptor is closed once it ended
@@ -117,15 +142,15 @@ def test_a_launched_command_past_its_timeout_gets_sigterm_then_sigkill(store, tm
     # SIGTERM is ignored: only the SIGKILL after the grace ends it; a grandchild in its group dies too
     run = _run(store, tmp_path, "trap '' TERM; sleep 60 & sleep 60", timeout=0.3, grace=0.3)
     begun = time.monotonic()
-    _, done = _drive(run, run.start())
+    done = _drive(run, run.start()).done[0]
     assert done.result.status is JobState.TIMEOUT and done.result.reason == "timed out after 0.3 s"
     assert time.monotonic() - begun >= 0.55          # the timeout, then the whole grace
     assert living_members(run.pid) == []
 
 
 def test_a_cancelled_launched_command_gets_sigint_then_its_grace(store, tmp_path):
-    run = _run(store, tmp_path, "trap 'echo stopping; exit 3' INT; while :; do sleep 0.05; done")
-    _, done = _drive(run, run.start(), cancel_after=0.3, grace=5.0)
+    run = _run(store, tmp_path, "trap 'echo stopping; exit 3' INT; echo ready; while :; do sleep 0.05; done")
+    done = _drive(run, run.start(), cancels=[(logged(run, "ready"), 5.0)]).done[0]
     assert done.result.status is JobState.CANCELLED
     assert "stopping" in (tmp_path / "res" / "j0" / "log.txt").read_text()   # it had its say
     assert living_members(run.pid) == []
@@ -145,6 +170,43 @@ def test_a_cancel_before_the_start_is_kept_and_acted_on_at_once(store, tmp_path)
     run = _run(store, tmp_path, "sleep 60")
     run.cancel(grace=0)                               # before start(): remembered
     begun = time.monotonic()
-    _, done = _drive(run, run.start())
+    done = _drive(run, run.start()).done[0]
     assert done.result.status is JobState.CANCELLED and done.result.reason != NOT_STARTED_REASON
     assert time.monotonic() - begun < 10             # killed at once, not after the sleep
+
+
+def test_a_timeout_during_a_cancels_grace_is_the_verdict_and_the_loop_does_not_spin(store, tmp_path):
+    """As on the thread path, the timeout still comes while a cancel's grace runs (SIGTERM, the verdict a
+    timeout); the SIGKILL comes when the earlier of the two graces ends; the loop sleeps meanwhile."""
+    run = _run(store, tmp_path, "trap '' INT TERM; echo ready; sleep 60", timeout=1.0, grace=1.5)
+    begun = time.monotonic()
+    driven = _drive(run, run.start(), cancels=[(logged(run, "ready"), 1.5)])
+    assert driven.done[0].result.status is JobState.TIMEOUT
+    assert time.monotonic() - begun >= 1.0
+    assert driven.waits < 500                       # a wait per deadline or 0.2 s, not a busy loop
+    assert living_members(run.pid) == []
+
+
+def test_a_job_that_ends_at_its_cancel_leaves_its_group_the_grace_then_ends(store, tmp_path):
+    """The job ends at SIGINT, a process of its group ignores it: the run ends when the grace is over (the
+    loop looks at the group until then), with the group killed."""
+    script = "(trap '' INT; echo ready; exec sleep 60) & trap 'exit 4' INT; while :; do sleep 0.05; done"
+    run = _run(store, tmp_path, script)
+    begun = time.monotonic()
+    driven = _drive(run, run.start(), cancels=[(logged(run, "ready"), 1.0)])
+    assert driven.done[0].result.status is JobState.CANCELLED
+    assert 1.0 <= time.monotonic() - begun < 15
+    assert living_members(run.pid) == []
+
+
+def test_a_forced_stop_cuts_the_groups_grace_short(store, tmp_path):
+    """The job ends at SIGINT but leaves a process of its group that ignores it: a second, forced cancel
+    (Ctrl-C twice, a lost lease) kills it at once instead of waiting for the first cancel's grace."""
+    script = "(trap '' INT; echo ready; exec sleep 60) & trap 'exit 4' INT; while :; do sleep 0.05; done"
+    run = _run(store, tmp_path, script)
+    begun = time.monotonic()
+    ended = lambda: run._ended is not None          # noqa: E731 - the job itself ended, its group did not
+    driven = _drive(run, run.start(), cancels=[(logged(run, "ready"), 30.0), (ended, 0.0)])
+    assert driven.done[0].result.status is JobState.CANCELLED
+    assert time.monotonic() - begun < 20            # not the 30 s grace
+    assert living_members(run.pid) == []

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import select
 import shutil
 import signal
 import socket
@@ -126,6 +127,8 @@ class ForkServer:
         self._running: dict[str, ForkedProcess] = {}
         self._early: dict[str, int] = {}           # exits that came before the spawner took its process
         self._replies: dict[str, Callable[[dict], None]] = {}   # submitted requests: who hears of them
+        self._receiving = threading.Lock()         # one reader of the replies at a time, each dispatched in order
+        self._reader: threading.Thread | None = None   # reads the replies once a thread waits in spawn()
         self._ids = itertools.count(1)
         self._alive = False
 
@@ -183,6 +186,7 @@ class ForkServer:
         to ``log_path``, which the server opens as the job starts (this process makes no file per job),
         after making its folder when ``log_folder`` says under which root (the root, its real path);
         waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
+        self._ensure_reader()
         request_id = str(next(self._ids))
         pending = _Pending()
         with self._table_lock:
@@ -198,7 +202,7 @@ class ForkServer:
             if output_fd is None:
                 request.update(log=log_path, append=append, folder=log_folder)
             try:
-                send(self._sock, request, None if output_fd is None else [output_fd])
+                self._send(request, None if output_fd is None else [output_fd])
             except OSError as exc:
                 self._forget(request_id)
                 raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
@@ -241,7 +245,7 @@ class ForkServer:
                 if not self._alive or self._sock is None:
                     raise ForkServerError("the built-in runner's fork server has ended")
                 try:
-                    send(self._sock, request)
+                    self._send(request)
                 except OSError as exc:
                     raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
             except ForkServerError:
@@ -265,38 +269,82 @@ class ForkServer:
             if self._sock is None:
                 return
             try:
-                send(self._sock, {"withdraw": request_id})
+                self._send({"withdraw": request_id})
             except OSError:
                 pass                 # the server is gone: the reader fails every pending request
 
+    def _send(self, message: dict, fds: list[int] | None = None) -> None:
+        """Send one message (holding ``_lock``) without ever blocking on a full socket while nobody reads the
+        replies: the server, blocked on its own full socket, would never read ours (with thousands of
+        jobs in flight). When there is no room, the replies that came are read first."""
+        assert self._sock is not None
+        while True:
+            try:
+                send(self._sock, message, fds, socket.MSG_DONTWAIT)
+                return
+            except BlockingIOError:
+                if self._reader is None and not self._drain():
+                    raise ForkServerError("the built-in runner's fork server has ended") from None
+                select.select([], [self._sock], [], 0.05)
+
+    def _ensure_reader(self) -> None:
+        """A thread waits in :meth:`spawn`: from now on a thread of our own reads the replies (the worker's
+        loop may be busy with the store meanwhile, and the waiting job's timer must not outrun its end)."""
+        with self._table_lock:
+            if self._reader is None:
+                self._reader = threading.Thread(target=self._read, name="fork-server-replies", daemon=True)
+                self._reader.start()
+
+    def _read(self) -> None:
+        """The reader thread: dispatch replies until the server ends."""
+        while self._sock is not None:
+            with self._receiving:
+                sock = self._sock
+                if sock is None:
+                    return
+                try:
+                    message, _ = receive(sock)
+                except OSError:
+                    message = None
+                if message is None:
+                    self._ended()
+                    return
+                self._dispatch(message)
+
     def fileno(self) -> int:
-        """The socket the server's replies come on (readable: call :meth:`poll`); -1 once it is closed."""
-        return -1 if self._sock is None else self._sock.fileno()
+        """The socket the worker's loop watches for replies (readable: call :meth:`poll`); -1 when closed,
+        or while a thread of our own reads them."""
+        return -1 if self._sock is None or self._reader is not None else self._sock.fileno()
 
     def poll(self) -> bool:
         """Dispatch every reply the server has sent so far (without waiting); False once it has ended.
 
         The worker's loop calls this whenever :meth:`fileno` is readable: a job's start and end reach
-        their waiters (a submitted request's ``reply``, a thread blocked in :meth:`spawn` or in its
-        process's ``wait``) through the loop, with no thread of the server's own. When the server
-        ends, its jobs are killed and what waits for it fails.
+        their waiters (a submitted request's ``reply``) through the loop, with no thread of the
+        server's own, until a thread waits in :meth:`spawn` (then its reader does it). When the
+        server ends, its jobs are killed and what waits for it fails.
         """
-        if self._sock is None:
-            return False
-        while True:
-            try:
-                message, _ = receive(self._sock, flags=socket.MSG_DONTWAIT)
-            except BlockingIOError:
-                return True
-            except OSError:
-                message = None
-            if message is None:
-                self._ended()
-                return False
-            self._dispatch(message)
+        if self._reader is not None:
+            return self._alive
+        return self._drain()
+
+    def _drain(self) -> bool:
+        with self._receiving:
+            while self._sock is not None:
+                try:
+                    message, _ = receive(self._sock, flags=socket.MSG_DONTWAIT)
+                except BlockingIOError:
+                    return True
+                except OSError:
+                    message = None
+                if message is None:
+                    self._ended()
+                    return False
+                self._dispatch(message)
+        return False
 
     def _ended(self) -> None:
-        """The server is gone: kill its jobs, fail the requests that wait for it."""
+        """The server is gone: kill its jobs, fail the requests that wait for it (once)."""
         self._alive = False
         with self._table_lock:
             pending = list(self._pending.values())

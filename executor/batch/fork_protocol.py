@@ -60,13 +60,14 @@ def open_log(request: dict) -> int:
     return os.open(request["log"], flags, 0o666)
 
 
-def send(sock: socket.socket, message: dict, fds: list[int] | None = None) -> None:
-    """One JSON message, with file descriptors attached when given."""
+def send(sock: socket.socket, message: dict, fds: list[int] | None = None, flags: int = 0) -> None:
+    """One JSON message, with file descriptors attached when given (``flags``: ``socket.MSG_DONTWAIT``
+    raises :class:`BlockingIOError` instead of waiting for room; a message is sent whole or not at all)."""
     data = json.dumps(message).encode()
     if fds:
-        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, array.array("i", fds))])
+        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, array.array("i", fds))], flags)
     else:
-        sock.sendall(data)
+        sock.sendmsg([data], [], flags)
 
 
 def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0) -> tuple[dict | None, list[int]]:

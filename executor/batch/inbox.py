@@ -30,16 +30,17 @@ class Inbox(Generic[Event]):
         self._owner = threading.get_ident()
         self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
         self._woken = False
+        self._closed = False
 
     def put(self, event: Event) -> None:
         """Add an event (from any thread); the loop wakes if it waits."""
         self._items.append(event)
-        if threading.get_ident() != self._owner and not self._woken:
+        if threading.get_ident() != self._owner and not self._woken and not self._closed:
             self._woken = True
             try:
                 os.write(self._wake_write, b"!")
-            except BlockingIOError:
-                pass                          # the pipe is full: the loop wakes all the same
+            except OSError:
+                pass                          # full: the loop wakes all the same (closed: nobody waits)
 
     def take(self) -> list[Event]:
         """Every event there is now (oldest first), leaving none."""
@@ -50,12 +51,15 @@ class Inbox(Generic[Event]):
 
     def wait(self, timeout: float, watched: Mapping[int, Callable[[], object]] | None = None) -> None:
         """Wait up to ``timeout`` seconds for an event, or for a watched descriptor to become readable;
-        then call the readable ones' functions (which read them, and may put events)."""
+        then call the readable ones' functions (which read them, and may put events). ``poll``, not
+        ``select``: descriptors above 1023 (thousands of children at once) are watched as well."""
         if self._items:
             timeout = 0.0
-        watched = watched or {}
-        ready, _, _ = select.select([self._wake_read, *watched], [], [], timeout)
-        for fd in ready:
+        poller = select.poll()
+        poller.register(self._wake_read, select.POLLIN)
+        for fd in watched or ():
+            poller.register(fd, select.POLLIN)
+        for fd, _mask in poller.poll(timeout * 1000.0):
             if fd == self._wake_read:
                 try:
                     while os.read(self._wake_read, 4096):
@@ -63,10 +67,11 @@ class Inbox(Generic[Event]):
                 except BlockingIOError:
                     pass
                 self._woken = False           # after the drain: a later put writes again
-            else:
+            elif watched is not None:
                 watched[fd]()
 
     def close(self) -> None:
+        self._closed = True
         for fd in (self._wake_read, self._wake_write):
             try:
                 os.close(fd)

@@ -69,6 +69,8 @@ class LoopRun:
         self._cancel_grace: float | None = None   # a cancel came (its grace)
         self._timed_out = False
         self._kill_at: float | None = None     # monotonic time of the SIGKILL a timeout or cancel arranged
+        self._killed = False                   # the SIGKILL went out: only the child's end is awaited
+        self._look_at: float | None = None     # the child ended, its group not yet: when to look again
         self._ended: tuple[int, float] | None = None   # (return code, when): the job ended, its group may not have
         self._finished = False
 
@@ -123,9 +125,9 @@ class LoopRun:
         """When :meth:`tick` has something to do (``time.monotonic``), None when nothing is pending."""
         if self._finished or self.pid is None:
             return None
-        if self._ended is not None:
-            return time.monotonic() + GROUP_POLL if self._kill_at is not None else None
-        times = [t for t in (self._kill_at, self._timeout_at()) if t is not None]
+        if self._ended is not None:            # the group's grace: when to look again
+            return self._look_at
+        times = [t for t in (None if self._killed else self._kill_at, self._timeout_at()) if t is not None]
         return min(times) if times else None
 
     def _timeout_at(self) -> float | None:
@@ -135,20 +137,22 @@ class LoopRun:
         return self._started_mono + timeout
 
     def tick(self, now: float) -> Events:
-        """Act on what is due at ``now``: the timeout's SIGTERM, the SIGKILL after the grace, the job's end."""
+        """Act on what is due at ``now``: the timeout's SIGTERM (also during a cancel's grace, as on the
+        thread path: the verdict is then the timeout), the SIGKILL after the grace, the job's end."""
         if self._finished or self.pid is None:
             return []
         if self._ended is None:
             timeout_at = self._timeout_at()
-            if timeout_at is not None and now >= timeout_at and self._cancel_grace is None:
+            if timeout_at is not None and now >= timeout_at:
                 self._timed_out = True
                 self._signal(signal.SIGTERM)
                 self._arm_kill(self.batch.options.grace)
-            if self._kill_at is not None and now >= self._kill_at:
-                self._signal(signal.SIGKILL)
+            if self._kill_at is not None and now >= self._kill_at and not self._killed:
+                self._kill()
             return []
         # signalled: the rest of the group gets its grace period too, then dies with the job
         if self._kill_at is not None and now < self._kill_at and group_alive(self.pid):
+            self._look_at = min(now + GROUP_POLL, self._kill_at)
             return []
         kill_group(self.pid)
         return [self._finish()]
@@ -175,7 +179,8 @@ class LoopRun:
     # ------------------------------------------------------------------ stopping
     def cancel(self, grace: float | None = None) -> None:
         """Stop the attempt: a start not made yet is taken back; a started child gets SIGINT, and SIGKILL
-        after ``grace`` (at once when 0). Safe to call again with a shorter grace."""
+        after ``grace`` (at once when 0), as does what is left of its group after the child ended. Safe
+        to call again with a shorter grace."""
         grace = self.batch.options.grace if grace is None else grace
         first = self._cancel_grace is None
         if not first and grace >= (self._cancel_grace or 0.0):
@@ -189,17 +194,29 @@ class LoopRun:
             return
         if self._ended is None:
             self._signal_stop(grace)
+        else:                                      # the group's grace: cut short (or at once)
+            self._arm_kill(max(grace, 0.0))
+            self._look_at = self._kill_at
+            if grace <= 0:
+                kill_group(self.pid)
 
     def _take_back(self) -> None:
         """A cancel before the child started: withdraw the request (a started child is stopped instead)."""
 
+    def abandon(self) -> None:
+        """The worker's loop failed: the child was sent SIGKILL (:meth:`cancel`); let go of it."""
+
     def _signal_stop(self, grace: float) -> None:
         if grace <= 0:
             self._kill_at = time.monotonic()
-            self._signal(signal.SIGKILL)
+            self._kill()
             return
         self._signal(signal.SIGINT)
         self._arm_kill(grace)
+
+    def _kill(self) -> None:
+        self._killed = True
+        self._signal(signal.SIGKILL)
 
     def _arm_kill(self, grace: float) -> None:
         deadline = time.monotonic() + grace

@@ -76,11 +76,20 @@ class SpawnedRun(LoopRun):
         return super().due()
 
     def tick(self, now: float) -> Events:
-        if self._pidfd is None and self._ended is None:
+        if self._ended is None:                # an end not read yet comes first: no timeout for a child that ended
             ended = self.on_readable()
             if ended:
                 return ended
         return super().tick(now)
+
+    def abandon(self) -> None:
+        """Reap the killed child (a few seconds at most) and close its descriptor: no zombie, no open pidfd."""
+        end = time.monotonic() + 5.0
+        while self.pid is not None and self._ended is None and not self._finished and time.monotonic() < end:
+            if self.on_readable():
+                break
+            time.sleep(GROUP_POLL)
+        self._closed()
 
     def _closed(self) -> None:
         if self._pidfd is not None:

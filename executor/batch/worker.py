@@ -142,13 +142,17 @@ class Worker:
         finally:
             gc.unfreeze()                        # a later loop in this process freezes afresh
             self.hand_over.close()
-            self._events.close()
+            if not any(run.alive() for run in self._runs.values()):
+                self._events.close()             # (a thread still running may yet write to it)
             if watchdog is not None:
                 watchdog.release()
 
     def _let_threads_end(self, seconds: float) -> None:
-        """Give the job threads up to ``seconds`` to end, reading the fork server's replies meanwhile
-        (a thread of a built-in job waits for them)."""
+        """After a failure of the loop (every job was sent SIGKILL): reap the children the loop watched,
+        and give the job threads up to ``seconds`` to end, reading the fork server's replies meanwhile
+        (a thread of a built-in job may wait for them); the events that come are dropped."""
+        for driven in list(self._driven.values()):
+            driven.abandon()
         end = time.monotonic() + seconds
         for run in list(self._runs.values()):
             while run.alive() and time.monotonic() < end:
@@ -156,6 +160,7 @@ class Worker:
                     run.join(0.05)
                 else:
                     self._events.wait(0.05, self._watched())
+                    self._events.take()
 
     @property
     def mark(self) -> str:
@@ -400,7 +405,7 @@ class Worker:
         """What the loop waits on besides its inbox: the fork server's replies, the launched children's ends."""
         watched: dict[int, Callable[[], object]] = {}
         server = self.hand_over.server
-        if server is not None:
+        if server is not None and server.fileno() >= 0:      # (-1: a thread of its own reads the replies)
             watched[server.fileno()] = server.poll
         for run in self._driven.values():
             if isinstance(run, SpawnedRun) and run.fileno() >= 0:
@@ -419,6 +424,11 @@ class Worker:
         """Timeouts and grace periods of the jobs the loop drives (see :mod:`executor.batch.loop_run`)."""
         due = self._driven_due()
         if due is not None and due <= now:
+            server = self.hand_over.server       # ends the server told of come first: an ended job
+            if server is not None:               # is not timed out (nor its reused pid signalled)
+                server.poll()
+                for event in self._events.take():
+                    self._add(event)
             for run in list(self._driven.values()):
                 for event in run.tick(now):
                     self._add(event)

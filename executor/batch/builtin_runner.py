@@ -68,6 +68,14 @@ class JobFolderRefused(ForkServerError):
     """The server could not make the job's folder (a full disk, a folder that leads elsewhere)."""
 
 
+def start_failure(reason: str | None, errno: int | None = None, folder: bool = False) -> ForkServerError:
+    """The error of a job the server could not start (its ``failed`` reply, or ``reason`` alone)."""
+    if folder:
+        return JobFolderRefused(errno, reason)
+    message = f"the built-in runner could not start the job: {reason}"
+    return ForkServerError(message) if errno is None else ForkServerError(errno, message)
+
+
 class ForkedProcess:
     """A job forked by the server, with the subset of ``subprocess.Popen`` that ChildProcess uses."""
 
@@ -212,10 +220,7 @@ class ForkServer:
         if pending.withdrawn:
             return None
         if pending.pid is None:
-            if pending.folder_refused:
-                raise JobFolderRefused(pending.errno, pending.reason)
-            message = f"the built-in runner could not start the job: {pending.reason}"
-            raise ForkServerError(message) if pending.errno is None else ForkServerError(pending.errno, message)
+            raise start_failure(pending.reason, pending.errno, pending.folder_refused)
         process = ForkedProcess(pending.pid, stdout)
         with self._table_lock:
             early = self._early.pop(request_id, None)
@@ -297,19 +302,26 @@ class ForkServer:
 
     def _read(self) -> None:
         """The reader thread: dispatch replies until the server ends."""
-        while self._sock is not None:
+        while True:
             with self._receiving:
                 sock = self._sock
-                if sock is None:
+                if sock is None or not self._take_reply(sock, 0):
                     return
-                try:
-                    message, _ = receive(sock)
-                except OSError:
-                    message = None
-                if message is None:
-                    self._ended()
-                    return
-                self._dispatch(message)
+
+    def _take_reply(self, sock: socket.socket, flags: int) -> bool:
+        """Receive and dispatch one reply (holding ``_receiving``); False when the server has ended (its
+        jobs killed, its waiters failed). With ``socket.MSG_DONTWAIT``, :class:`BlockingIOError` when none came."""
+        try:
+            message, _ = receive(sock, flags=flags)
+        except BlockingIOError:
+            raise
+        except OSError:
+            message = None
+        if message is None:
+            self._ended()
+            return False
+        self._dispatch(message)
+        return True
 
     def fileno(self) -> int:
         """The socket the worker's loop watches for replies (readable: call :meth:`poll`); -1 when closed,
@@ -330,17 +342,12 @@ class ForkServer:
 
     def _drain(self) -> bool:
         with self._receiving:
-            while self._sock is not None:
+            while (sock := self._sock) is not None:
                 try:
-                    message, _ = receive(self._sock, flags=socket.MSG_DONTWAIT)
+                    if not self._take_reply(sock, socket.MSG_DONTWAIT):
+                        return False
                 except BlockingIOError:
                     return True
-                except OSError:
-                    message = None
-                if message is None:
-                    self._ended()
-                    return False
-                self._dispatch(message)
         return False
 
     def _ended(self) -> None:

@@ -10,19 +10,16 @@ from __future__ import annotations
 import os
 import signal
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.results.files import LOG_FILE
-from executor.batch.builtin_runner import BUILTIN_COMMAND, ForkServer
-from executor.batch.job_run import Done, StartOrder, job_marker, undo_folder
-from executor.batch.launch_template import substitute
+from executor.batch.builtin_runner import ForkServer, start_failure
+from executor.batch.job_run import Done, StartOrder, failed_attempt, not_started
 from executor.batch.loop_run import Events, LoopRun
-from executor.batch.verdict import disk_full_result, launch_failure
-from executor.children.process import DISK_FULL_ERRNOS, JOB_ENV, kill_group
-from store.jobs import Batch, Job, JobResult
-from store.states import NOT_STARTED_REASON, JobState
+from executor.children.process import kill_group
+from store.jobs import Batch, Job
 
 
 @dataclass(frozen=True)
@@ -45,13 +42,8 @@ class ForkedRun(LoopRun):
         self.folder_root = folder_root
         self._request: str | None = None
 
-    def _launch(self) -> Events:
-        options = self.batch.options
-        builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
-        launch = substitute(builtin, self.scenario_path, str(self.output_dir))
-        environment = {**self.environment, **dict(launch.environment),
-                       JOB_ENV: job_marker(self.job.id, self.job.attempts)}
-        self._request = self.server.submit(launch.argv, cwd=self.cwd, environment=environment,
+    def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
+        self._request = self.server.submit(argv, cwd=self.cwd, environment=environment,
                                            log_path=os.path.abspath(self.output_dir / LOG_FILE), append=False,
                                            log_folder=self.folder_root, reply=self._reply)
         return []
@@ -79,20 +71,12 @@ class ForkedRun(LoopRun):
         return self._on_exited(-signal.SIGKILL)
 
     def _failed(self, message: dict) -> Done:
-        now = time.time()
-        reason = str(message.get("reason"))
-        if message.get("errno") in DISK_FULL_ERRNOS:
-            return self._done(disk_full_result(self.output_dir, now, now))
-        what = reason if message.get("folder") else \
-            f"cannot start the launch command: the built-in runner could not start the job: {reason}"
-        return self._done(launch_failure(self.output_dir, now, now, what))
+        """A job the server could not start: the result the thread path gives the same failure."""
+        failure = start_failure(message.get("reason"), message.get("errno"), bool(message.get("folder")))
+        return self._done(failed_attempt(self.output_dir, time.time(), failure))
 
     def _not_started(self) -> Done:
-        if not self.lost:                          # (a lost job's folder may be its next attempt's already)
-            undo_folder(self.output_dir, self._kept_log, False)
-        now = time.time()
-        return self._done(JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
-                                    output_dir=str(self.output_dir)))
+        return self._done(not_started(self.output_dir, self._kept_log, False, self.lost))
 
     def _take_back(self) -> None:
         if self._request is not None:

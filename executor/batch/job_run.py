@@ -17,7 +17,7 @@ from typing import BinaryIO, Protocol
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
 from executor.batch.builtin_runner import BUILTIN_COMMAND, JobFolderRefused
 from executor.batch.inputs import not_utf8_reason
-from executor.batch.launch_template import substitute
+from executor.batch.launch_template import Launch, substitute
 from executor.batch.verdict import (
     FileMark,
     disk_full_result,
@@ -104,6 +104,47 @@ def undo_folder(output_dir: Path, kept_log: Path | None, made_folder: bool) -> N
             output_dir.rmdir()
     except OSError:
         pass                                     # not empty (someone wrote there): leave it
+
+
+def not_started(output_dir: Path, kept_log: Path | None, made_folder: bool, lost: bool) -> JobResult:
+    """The result of an attempt cancelled before its child started: its folder as it was (unless the job
+    was lost: its folder may be its next attempt's already)."""
+    if not lost:
+        undo_folder(output_dir, kept_log, made_folder)
+    now = time.time()
+    return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON, output_dir=str(output_dir))
+
+
+def attempt_marks(output_dir: Path) -> tuple[FileMark, FileMark]:
+    """How ``test.xml`` and ``coverage.json`` look before an attempt (a stale one is not taken as its own)."""
+    return FileMark.of(output_dir / RESULT_FILE), FileMark.of(output_dir / COVERAGE_FILE)
+
+
+def refuse_unusable(output_dir: Path, scenario_path: str) -> JobResult | None:
+    """The result of an attempt that cannot run because its scenario's name is not UTF-8 (said in the
+    job's log too, where people look first); None when it can run."""
+    unusable = not_utf8_reason(scenario_path)
+    if unusable is None:
+        return None
+    output_dir.mkdir(parents=True, exist_ok=True)
+    (output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
+    return launch_failure(output_dir, time.time(), time.time(), unusable)
+
+
+def launch_of(batch: Batch, scenario_path: str, output_dir: Path) -> Launch:
+    """What an attempt runs: the batch's launch command, or the built-in runner's (with ``--simulation``)."""
+    options = batch.options
+    builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
+    return substitute(batch.command or builtin, scenario_path, str(output_dir))
+
+
+def failed_attempt(output_dir: Path, began: float, exc: OSError) -> JobResult:
+    """The result of an attempt whose child could not be started (a full disk stops it instead)."""
+    if disk_full(exc):
+        return disk_full_result(output_dir, began, time.time())
+    what = (exc.strerror or str(exc)) if isinstance(exc, JobFolderRefused) else \
+        f"cannot start the launch command: {exc.strerror or exc}"
+    return launch_failure(output_dir, began, time.time(), what)
 
 
 class EventSink(Protocol):
@@ -224,10 +265,7 @@ class JobRun:
             finally:
                 self.pass_turn()              # an attempt that failed before its start passes it on
         except OSError as exc:
-            what = (exc.strerror or str(exc)) if isinstance(exc, JobFolderRefused) else \
-                f"cannot start the launch command: {exc.strerror or exc}"
-            result = disk_full_result(self.output_dir, started, time.time()) if disk_full(exc) else launch_failure(
-                self.output_dir, started, time.time(), what)
+            result = failed_attempt(self.output_dir, started, exc)
         except Exception as exc:  # noqa: BLE001 - an attempt must always end with a result
             result = launch_failure(self.output_dir, started, time.time(), f"internal error: {exc!r}")
         self.events.put(Done(self, result, problems))
@@ -237,17 +275,13 @@ class JobRun:
         if self.folder_root is None:             # else the fork server makes it as the job starts
             self.output_dir.mkdir(parents=True, exist_ok=True)
         kept_log = rotate_log(self.output_dir, self.job.attempts)
-        mark = FileMark.of(self.output_dir / RESULT_FILE)
-        coverage_mark = FileMark.of(self.output_dir / COVERAGE_FILE)
+        mark, coverage_mark = attempt_marks(self.output_dir)
         if not self.batch.command and self.launcher is None:
             raise OSError("the built-in runner is not available")
-        unusable = not_utf8_reason(self.scenario_path)
-        if unusable is not None:                  # said in the job's log too, where people look first
-            self.output_dir.mkdir(parents=True, exist_ok=True)
-            (self.output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
-            return launch_failure(self.output_dir, time.time(), time.time(), unusable)
-        builtin = BUILTIN_COMMAND + (("--simulation", options.simulation) if options.simulation else ())
-        launch = substitute(self.batch.command or builtin, self.scenario_path, str(self.output_dir))
+        refused = refuse_unusable(self.output_dir, self.scenario_path)
+        if refused is not None:
+            return refused
+        launch = launch_of(self.batch, self.scenario_path, self.output_dir)
         child = ChildProcess(list(launch.argv), str(self.output_dir / LOG_FILE), cwd=self.cwd,
                              timeout=options.timeout, grace=options.grace, echo=self.echo,
                              environment={**self.environment, **dict(launch.environment)},
@@ -266,12 +300,8 @@ class JobRun:
             pid = None if cancelled else child.start()
         finally:
             self.pass_turn()                      # (when the launcher had it, the turn passed already)
-        if pid is None:                           # cancelled before it started: the folder as it was
-            if not self.lost:                     # (a lost job's folder may be its next attempt's already)
-                undo_folder(self.output_dir, kept_log, self.made_folder)
-            now = time.time()
-            return JobResult(JobState.CANCELLED, None, now, now, reason=NOT_STARTED_REASON,
-                             output_dir=str(self.output_dir))
+        if pid is None:                           # cancelled before it started
+            return not_started(self.output_dir, kept_log, self.made_folder, self.lost)
         self.events.put(Started(self, pid))
         outcome = child.wait()
         if options.post_run and not outcome.cancelled:

@@ -27,14 +27,22 @@ from __future__ import annotations
 import os
 import signal
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
-from executor.batch.inputs import not_utf8_reason
-from executor.batch.job_run import Done, Started, StartOrder, rotate_log
-from executor.batch.verdict import FileMark, disk_full_result, judge, launch_failure
-from executor.children.process import DISK_FULL_ERRNOS, ProcessOutcome, group_alive, kill_group
+from executor.batch.job_run import (
+    Done,
+    Started,
+    StartOrder,
+    attempt_marks,
+    failed_attempt,
+    job_marker,
+    launch_of,
+    refuse_unusable,
+    rotate_log,
+)
+from executor.batch.verdict import FileMark, judge, launch_failure
+from executor.children.process import JOB_ENV, ProcessOutcome, group_alive, kill_group
 from store.jobs import Batch, Job, JobResult
 
 #: Seconds between looks at a signalled job's process group after the job itself ended (its rest has
@@ -80,29 +88,24 @@ class LoopRun:
         began = time.time()
         try:
             self._kept_log = rotate_log(self.output_dir, self.job.attempts)
-            self._marks = (FileMark.of(self.output_dir / RESULT_FILE),
-                           FileMark.of(self.output_dir / COVERAGE_FILE))
-            unusable = not_utf8_reason(self.scenario_path)
-            if unusable is not None:              # said in the job's log too, where people look first
-                self.output_dir.mkdir(parents=True, exist_ok=True)
-                (self.output_dir / LOG_FILE).write_text(f"error: {unusable}\n", encoding="utf-8")
-                return [self._done(launch_failure(self.output_dir, time.time(), time.time(), unusable))]
-            return self._launch()
+            self._marks = attempt_marks(self.output_dir)
+            refused = refuse_unusable(self.output_dir, self.scenario_path)
+            if refused is not None:
+                return [self._done(refused)]
+            launch = launch_of(self.batch, self.scenario_path, self.output_dir)
+            return self._launch(launch.argv, {**self.environment, **dict(launch.environment),
+                                              JOB_ENV: job_marker(self.job.id, self.job.attempts)})
         except OSError as exc:
-            return [self._done(self._launch_error(exc, began))]
+            return [self._done(failed_attempt(self.output_dir, began, exc))]
         except Exception as exc:  # noqa: BLE001 - an attempt must always end with a result
             return [self._done(launch_failure(self.output_dir, began, time.time(), f"internal error: {exc!r}"))]
         finally:
             self.pass_turn()
 
-    def _launch(self) -> Events:
-        """Start the child, or ask for it; raises ``OSError`` when it cannot be."""
+    def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
+        """Start the child running ``argv`` with ``environment`` added, or ask for it; raises ``OSError``
+        when it cannot be."""
         raise NotImplementedError
-
-    def _launch_error(self, exc: OSError, began: float) -> JobResult:
-        what = f"cannot start the launch command: {exc.strerror or exc}"
-        return disk_full_result(self.output_dir, began, time.time()) if exc.errno in DISK_FULL_ERRNOS \
-            else launch_failure(self.output_dir, began, time.time(), what)
 
     def pass_turn(self) -> None:
         if self.order is not None:

@@ -11,14 +11,12 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from coverage_engine.results.files import LOG_FILE
-from executor.batch.job_run import StartOrder, job_marker
-from executor.batch.launch_template import substitute
+from executor.batch.job_run import StartOrder
 from executor.batch.loop_run import GROUP_POLL, Events, LoopRun
-from executor.children.process import JOB_ENV
 from executor.children.spawn import spawn_logged
 from store.jobs import Batch, Job
 
@@ -36,13 +34,8 @@ class SpawnedRun(LoopRun):
         super().__init__(job, batch, output_dir, scenario_path, cwd=None, environment=environment, order=order)
         self._pidfd: int | None = None
 
-    def _launch(self) -> Events:
-        assert self.batch.command
-        launch = substitute(self.batch.command, self.scenario_path, str(self.output_dir))
-        environment = {**self.environment, **dict(launch.environment),
-                       JOB_ENV: job_marker(self.job.id, self.job.attempts)}
-        pid = spawn_logged(launch.argv, str(self.output_dir / LOG_FILE), append=False,
-                           extra_environment=environment).pid
+    def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
+        pid = spawn_logged(argv, str(self.output_dir / LOG_FILE), append=False, extra_environment=environment).pid
         try:
             self._pidfd = os.pidfd_open(pid)
         except OSError:

@@ -31,11 +31,22 @@ class VariantInfo:
     header: str = ""
 
 
-def _candidates(path: str) -> set[str]:
-    """Spellings under which a file may have been recorded: as given, absolute, with links resolved."""
-    names = {path, os.path.abspath(path)}
+def _candidates(path: str, real_folders: dict[str, str]) -> set[str]:
+    """Spellings under which a file may have been recorded: as given, absolute, with links resolved.
+
+    ``real_folders`` caches each folder's real path: the variants of a batch share a few folders, and
+    resolving every file's whole path took a look at each of its parents (five system calls a job)."""
+    absolute = os.path.abspath(path)
+    names = {path, absolute}
     try:
-        names.add(os.path.realpath(path))
+        if os.path.islink(absolute):
+            names.add(os.path.realpath(absolute))
+        else:
+            folder, name = os.path.split(absolute)
+            real = real_folders.get(folder)
+            if real is None:
+                real = real_folders[folder] = os.path.realpath(folder)
+            names.add(os.path.join(real, name))
     except OSError:
         pass
     return names
@@ -57,8 +68,9 @@ def variant_infos(engine: Engine, paths: Iterable[str], header_chars: int = 0) -
     ``header_chars`` > 0 also gives each variant the start of its variation's ``.sce`` header (one string
     shared by the variants of a variation run)."""
     wanted: dict[str, str] = {}
+    real_folders: dict[str, str] = {}
     for path in paths:
-        for name in _candidates(path):
+        for name in _candidates(path, real_folders):
             wanted.setdefault(name, path)
     if not wanted:
         return {}

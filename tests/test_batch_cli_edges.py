@@ -15,8 +15,27 @@ import pytest
 from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, write_child, write_scenarios
 
 from executor.batch.errors import BadCommand
-from executor.batch.inputs import check_command
+from executor.batch.inputs import MAX_STORED_TEXT, check_command, job_specs
 from executor.batch.launch_template import substitute
+
+
+def test_job_specs_hash_every_file_whole_and_keep_only_small_texts_of_a_shared_batch(tmp_path):
+    import hashlib
+
+    sizes = {"small": 100, "edge": MAX_STORED_TEXT, "over": MAX_STORED_TEXT + 1, "large": 3 * MAX_STORED_TEXT + 5}
+    files = []
+    for name, size in sizes.items():
+        path = tmp_path / f"{name}.sce"
+        path.write_bytes(b"a" * (size - 1) + b"\n")
+        files.append(path)
+    shared = {spec.name: spec for spec in job_specs(files)}
+    local = {spec.name: spec for spec in job_specs(files, keep_texts=False)}
+    for path in files:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        assert shared[path.stem].scenario_sha == local[path.stem].scenario_sha == digest
+        assert local[path.stem].scenario_text is None
+    assert shared["small"].scenario_text == "a" * 99 + "\n" and shared["edge"].scenario_text is not None
+    assert shared["over"].scenario_text is None and shared["large"].scenario_text is None
 
 
 def test_a_value_is_never_searched_for_placeholders_again():

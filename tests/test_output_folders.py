@@ -100,6 +100,19 @@ def test_a_result_that_is_a_link_to_a_secret_is_never_read(tmp_path):
     assert "test.xml is a symbolic link: not followed" in report
 
 
+def test_a_result_left_as_a_fifo_is_refused_without_waiting_for_a_writer(tmp_path):
+    """A child leaving test.xml and log.txt as FIFOs: the batch must not wait in open() for a writer that
+    never comes; the job is an error that says why, and the batch ends."""
+    write_scenarios(tmp_path / "in", {"piped": "x"})
+    script = ("rm -f {OUTPUT_DIR}/log.txt; mkfifo {OUTPUT_DIR}/log.txt {OUTPUT_DIR}/test.xml; "
+              "echo {SCENARIO} > /dev/null")
+    done = run_cli(["-i", "in", "-o", "results", "--timeout", "60", "--", "sh", "-c", script], tmp_path,
+                   cli_env(tmp_path))
+    assert done.returncode == 1, done.stdout + done.stderr
+    error = ET.parse(tmp_path / "results" / "test.xml").getroot().find(".//testcase/error")
+    assert error is not None and "test.xml is not a regular file" in error.get("message", "")
+
+
 def test_a_file_planted_where_a_job_folder_goes_is_left_alone_and_the_rest_runs(tmp_path):
     child = write_child(tmp_path)
     write_scenarios(tmp_path / "in", {"filed": "xml=pass", "fine": "xml=pass"})

@@ -65,6 +65,21 @@ def test_an_unreadable_report_is_one_error_with_one_exception(tmp_path):
         read_cases(bomb)
 
 
+def test_entities_are_refused_with_or_without_a_document_type_and_a_plain_declaration_reads_alike():
+    plain = '<testsuite><testcase name="a &amp; b" classname="c"><failure message="&#233;"/></testcase></testsuite>'
+    declared = '<?xml version="1.0"?><!DOCTYPE testsuite>' + plain
+    assert read_cases(plain) == read_cases(declared)
+    assert read_cases(plain)[0].name == "a & b" and read_cases(plain)[0].message == "\u00e9"
+    with pytest.raises(JunitUnreadable, match="not well-formed"):       # no declaration: no entity to use
+        read_cases('<testsuite><testcase name="&a;"/></testsuite>')
+    external = ('<?xml version="1.0"?><!DOCTYPE x [<!ENTITY e SYSTEM "file:///etc/passwd">]>'
+                '<testsuite><testcase name="&e;"/></testsuite>')
+    with pytest.raises(JunitUnreadable):
+        read_cases(external)
+    with pytest.raises(JunitUnreadable, match="not well-formed"):       # XML spells the declaration in capitals
+        read_cases('<!doctype x [<!ENTITY a "aaaa">]><testsuite><testcase name="&a;"/></testsuite>')
+
+
 def test_every_job_state_has_a_verdict_and_only_final_ones_are_finished():
     assert set(VERDICT_OF_STATE) == {state.value for state in JobState}
     for state in JobState:

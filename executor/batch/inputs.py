@@ -97,8 +97,14 @@ class Shard:
         return {position for rank, position in enumerate(order) if rank % self.count == self.index - 1}
 
 
-def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec]:
-    """One job per file (path made absolute, content hashed and kept if small), limited to ``shard``."""
+def job_specs(files: Sequence[Path], shard: Shard | None = None, *, keep_texts: bool = True) -> list[JobSpec]:
+    """One job per file (path made absolute, content hashed), limited to ``shard``.
+
+    ``keep_texts``: the store also keeps each small file's text, for the workers of a shared batch on
+    hosts without the file. A local batch runs its files where they are and needs no copy; keeping one
+    made every change of a job's row (claimed, started, ended) rewrite the whole text on SQLite, whose
+    updates rewrite a row's every page: a third of the batch process's store time on 17 KB variants.
+    """
     specs = []
     # A shard hashes every file to place it, holding only the hashes (not 666,469 files' contents).
     kept = shard.select([_content(path)[0] + "\0" + path.name for path in files]) if shard is not None else None
@@ -114,7 +120,8 @@ def job_specs(files: Sequence[Path], shard: Shard | None = None) -> list[JobSpec
             specs.append(JobSpec(name=surrogates_escaped(path.stem), scenario_path=surrogates_escaped(resolved),
                                  scenario_sha=sha))
             continue
-        specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha, scenario_text=text))
+        specs.append(JobSpec(name=path.stem, scenario_path=resolved, scenario_sha=sha,
+                             scenario_text=text if keep_texts else None))
     return specs
 
 
@@ -122,11 +129,20 @@ def _content(path: Path) -> tuple[str, str | None]:
     """The file's SHA-256 and, when it is small UTF-8 text without NUL, the text itself. A large file is
     hashed in chunks, never held whole (a stray 500 MB file costs a 1 MiB buffer, not 500 MB)."""
     with open(path, "rb") as handle:
-        head = handle.read(MAX_STORED_TEXT + 1)
+        # a buffer the file's size (a byte more, to see its end), not MAX_STORED_TEXT for each file:
+        # a megabyte mapped, touched and shrunk per file cost more than reading a small one
+        size = os.fstat(handle.fileno()).st_size
+        head = handle.read(min(size, MAX_STORED_TEXT) + 1)
         digest = hashlib.sha256(head)
+        rest = iter(lambda: handle.read(MAX_STORED_TEXT), b"")    # more than fstat said: it grew since
+        for chunk in rest:
+            digest.update(chunk)
+            if len(head) + len(chunk) > MAX_STORED_TEXT:
+                for chunk in rest:
+                    digest.update(chunk)
+                return digest.hexdigest(), None
+            head += chunk
         if len(head) > MAX_STORED_TEXT:
-            for chunk in iter(lambda: handle.read(MAX_STORED_TEXT), b""):
-                digest.update(chunk)
             return digest.hexdigest(), None
     try:
         text = head.decode("utf-8")

@@ -120,7 +120,7 @@ def _discovered_specs(request: BatchRequest, mode: str) -> list[JobSpec]:
         print(f"warning: {name}: the file name is not UTF-8; its job fails (rename the file)", file=sys.stderr)
     if request.command:                  # an empty command: the built-in runner
         check_command(request.command, require_executable=mode == "local")
-    return expand_specs(job_specs(files, request.shard), request.options.repeat)
+    return expand_specs(job_specs(files, request.shard, keep_texts=mode != "local"), request.options.repeat)
 
 
 def _shard_options(request: BatchRequest) -> BatchOptions:
@@ -150,7 +150,7 @@ def rerun_failed_batch(store: QueueStore, output_dir: str) -> tuple[Batch, Batch
     batch = store.create_batch(mode="local", input_dir=earlier.input_dir, output_dir=output_dir,
                                host=socket.gethostname(), command=earlier.command,
                                options=replace(earlier.options, continues=earlier.id),
-                               specs=expand_specs(job_specs(files), earlier.options.repeat))
+                               specs=expand_specs(job_specs(files, keep_texts=False), earlier.options.repeat))
     return earlier, batch
 
 

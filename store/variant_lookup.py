@@ -39,8 +39,8 @@ def _candidates(path: str, real_folders: dict[str, str]) -> set[str]:
     absolute = os.path.abspath(path)
     names = {path, absolute}
     try:
-        if os.path.islink(absolute):
-            names.add(os.path.realpath(absolute))
+        if os.path.islink(absolute) or os.pardir in path.split(os.sep):   # ".." after a link: resolve it first
+            names.add(os.path.realpath(path))
         else:
             folder, name = os.path.split(absolute)
             real = real_folders.get(folder)

@@ -119,3 +119,25 @@ def test_times_and_timestamps_fit_the_schema():
     assert [c.get("time") for c in root.iter("testcase")] == ["0.000010", "0.000000"]
     assert [c.get("timestamp") for c in root.iter("testcase")] == [None, None]
     assert root.find("testsuite").get("timestamp").startswith("2023-11-1")
+
+
+def test_a_variant_is_looked_up_under_every_spelling_of_its_path(tmp_path, monkeypatch):
+    """As given, absolute, and with links resolved: through a linked folder, a linked file, and a ``..``
+    after a link (resolved after the link, as the system does), each folder resolved once."""
+    import os
+
+    from store.variant_lookup import _candidates
+
+    deep = tmp_path / "real" / "deep"
+    (deep / "sub").mkdir(parents=True)
+    (deep / "f.sce").write_text("x")
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "t.sce").write_text("x")
+    (tmp_path / "real" / "filelink.sce").symlink_to(tmp_path / "other" / "t.sce")
+    (tmp_path / "link").symlink_to(deep / "sub")
+    (tmp_path / "deeplink").symlink_to(deep)
+    monkeypatch.chdir(tmp_path)
+    for path in ("link/../f.sce", "deeplink/f.sce", "deeplink/../filelink.sce", "real/filelink.sce",
+                 "missing/none.sce", str(tmp_path / "real" / "deep" / "f.sce")):
+        names = _candidates(path, {})
+        assert {path, os.path.abspath(path), os.path.realpath(path)} == names, path

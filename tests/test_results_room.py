@@ -76,6 +76,8 @@ def test_entities_are_refused_with_or_without_a_document_type_and_a_plain_declar
                 '<testsuite><testcase name="&e;"/></testsuite>')
     with pytest.raises(JunitUnreadable):
         read_cases(external)
+    with pytest.raises(TypeError):            # bytes could spell the declaration in another encoding
+        read_cases(declared.encode("utf-16"))
     with pytest.raises(JunitUnreadable, match="not well-formed"):       # XML spells the declaration in capitals
         read_cases('<!doctype x [<!ENTITY a "aaaa">]><testsuite><testcase name="&a;"/></testsuite>')
 

@@ -80,6 +80,8 @@ def _case(element: Any) -> Case:
 
 def read_cases(xml_text: str) -> list[Case]:
     """The testcases of a JUnit document (``<testsuites>`` or a single ``<testsuite>``), in document order."""
+    if not isinstance(xml_text, str):      # bytes could hide a declaration in another encoding from the check
+        raise TypeError(f"read_cases reads text, not {type(xml_text).__name__}")
     try:
         root = StdET.fromstring(xml_text) if _DOCTYPE not in xml_text else SafeET.fromstring(xml_text)
     except (SafeET.ParseError, DefusedXmlException, ValueError) as exc:

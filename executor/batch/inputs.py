@@ -10,7 +10,7 @@ import hashlib
 import os
 import re
 import shutil
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -131,10 +131,11 @@ def _content(path: Path) -> tuple[str, str | None]:
     with open(path, "rb") as handle:
         # a buffer the file's size (a byte more, to see its end), not MAX_STORED_TEXT for each file:
         # a megabyte mapped, touched and shrunk per file cost more than reading a small one
-        size = os.fstat(handle.fileno()).st_size
-        head = handle.read(min(size, MAX_STORED_TEXT) + 1)
+        asked = min(os.fstat(handle.fileno()).st_size, MAX_STORED_TEXT) + 1
+        head = handle.read(asked)
         digest = hashlib.sha256(head)
-        rest = iter(lambda: handle.read(MAX_STORED_TEXT), b"")    # more than fstat said: it grew since
+        # fewer bytes than asked: the end was reached; else the file is large, or grew since fstat
+        rest: Iterator[bytes] = iter(lambda: handle.read(MAX_STORED_TEXT), b"") if len(head) == asked else iter(())
         for chunk in rest:
             digest.update(chunk)
             if len(head) + len(chunk) > MAX_STORED_TEXT:

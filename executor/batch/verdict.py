@@ -97,12 +97,12 @@ def read_child_file(path: Path, *, limit: int | None = None, tail: int | None = 
         os.close(fd)
 
 
-def _read_from(fd: int, start: int, expected: int) -> bytes:
-    """The bytes from ``start`` to the end (a file still growing is read to where it ended when looked at,
-    plus what one more read finds)."""
-    data = os.pread(fd, expected + 1, start)
-    while len(data) < expected:
-        more = os.pread(fd, expected - len(data), start + len(data))
+def _read_from(fd: int, start: int, length: int) -> bytes:
+    """``length`` bytes from ``start`` (fewer when the file is shorter by now): the file as it was when its
+    size was looked at, even if it grows meanwhile."""
+    data = os.pread(fd, length, start)
+    while 0 < len(data) < length:
+        more = os.pread(fd, length - len(data), start + len(data))
         if not more:
             break
         data += more

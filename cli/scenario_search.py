@@ -83,6 +83,7 @@ def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int
     """
     import os
 
+    from coverage_engine.search.target import SearchTarget
     from executor.search.loop import run_search
     from executor.search.request import SearchRequest, SearchSettings
 
@@ -104,8 +105,8 @@ def command(output_dir: str, goal: str, budget: int, round_size: int, slots: int
 
         seed = secrets.randbelow(2**31)
     settings = SearchSettings(scenario=os.path.abspath(scenario) if scenario else "", goal=goal, budget=budget,
-                              round_size=round_size, seed=seed or 0, objective=objective, maximise=maximise,
-                              threshold=threshold, resolution=resolution, pass_rate=pass_rate, along=along,
+                              round_size=round_size, seed=seed or 0,
+                              target=SearchTarget(objective, maximise, threshold, resolution, pass_rate, along),
                               command=tuple(command),
                               timeout=timeout, grace=grace, retries=retries, simulation=simulation)
     ctx = click.get_current_context()

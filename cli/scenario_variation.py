@@ -77,6 +77,7 @@ def command(ctx: click.Context, scenarios: tuple[str, ...], output_dir: str, deb
     default --strategy full every combination is written, the first dimension varying slowest.
     """
     from coverage_engine.errors import OscError
+    from coverage_engine.search.target import SearchTarget
     from executor.variation.generation import run
 
     files = _scenario_files(scenarios)
@@ -86,9 +87,9 @@ def command(ctx: click.Context, scenarios: tuple[str, ...], output_dir: str, deb
             scenario=scenario, output_dir=output_dir, parameter_file=scenario_parameter_file, list_only=list_only,
             log_model=log_model, debug=debug, store=store_url, max_variants=max_variants, strategy=strategy,
             strength=strength, samples=samples, seed=seed, wait=wait, only_new=only_new,
-            from_results=tuple(from_results), objective=objective, maximise=maximise, threshold=threshold,
-            resolution=resolution, round_number=round_number, from_store=bool(from_results) and _store_named(),
-            pass_rate=pass_rate, along=along)
+            from_results=tuple(from_results),
+            target=SearchTarget(objective, maximise, threshold, resolution, pass_rate, along),
+            round_number=round_number, from_store=bool(from_results) and _store_named())
         if len(files) == 1:
             return run(request)
         try:                     # several files: each is done on its own; one that fails stops only itself

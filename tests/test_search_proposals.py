@@ -28,6 +28,7 @@ from coverage_engine.search.holes import propose_holes
 from coverage_engine.search.propose import SearchOptions, propose_round
 from coverage_engine.search.space import Space, coordinate_of
 from coverage_engine.search.surface import fit_surface
+from coverage_engine.search.target import SearchTarget
 
 SPEED = InputDomain("t.speed", low=10.0, high=50.0, unit="kph")
 LANES = InputDomain("t.lanes", values=(1, 2, 3))
@@ -177,7 +178,7 @@ def test_boundary_with_a_threshold_splits_the_runs_by_a_record_value_instead_of_
     space = Space((SPEED,))
     runs = tuple(PastRun(f"r{i}", "passed", {"t.speed": 10.0 + 40.0 * u}, {"ttc": (3.0 - 4.0 * u,)})
                  for i, u in enumerate([0.1, 0.3, 0.6, 0.9]))     # every run passed; ttc falls below 1 s past u = 0.5
-    options = SearchOptions("boundary", 1, 1, (), objective="ttc", threshold=1.0)
+    options = SearchOptions("boundary", 1, 1, (), SearchTarget(objective="ttc", threshold=1.0))
     proposal = propose_round(space, History(runs), options)
     axis = proposal.record.estimate.boundary.axes["t.speed"]
     assert (axis.value, axis.error) == (28.0, 6.0) and proposal.record.objective == "ttc"
@@ -185,4 +186,4 @@ def test_boundary_with_a_threshold_splits_the_runs_by_a_record_value_instead_of_
     verdicts = propose_round(space, History(runs), SearchOptions("boundary", 1, 1, ()))
     assert verdicts.record.estimate.boundary.pairs == 0      # by verdict nothing flips
     with pytest.raises(SearchError, match="--threshold needs --objective"):
-        propose_round(space, History(runs), SearchOptions("boundary", 1, 1, (), threshold=1.0))
+        propose_round(space, History(runs), SearchOptions("boundary", 1, 1, (), SearchTarget(threshold=1.0)))

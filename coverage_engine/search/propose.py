@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 from coverage_engine.coverage.run_records import ItemDecl
 from coverage_engine.domains import numeric_value
 from coverage_engine.proposals import FIRST_ROUND
-from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
+from coverage_engine.search import ADAPTIVE
 from coverage_engine.search.boundary import Observation, propose_boundary
 from coverage_engine.search.errors import SearchError
 from coverage_engine.search.estimate import (
@@ -29,6 +29,7 @@ from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.holes import propose_holes
 from coverage_engine.search.pass_rate import RateRun, propose_pass_rate
 from coverage_engine.search.space import Point, Space
+from coverage_engine.search.target import SearchTarget
 
 #: What a strategy's round gives: its points, its estimate and notes to print.
 StrategyRound = tuple[tuple[Point, ...], Estimate, tuple[str, ...]]
@@ -42,14 +43,8 @@ class SearchOptions:
     samples: int
     seed: int
     sources: tuple[str, ...]
-    objective: str | None = None
-    maximise: bool = False
-    threshold: float | None = None
-    resolution: float = DEFAULT_RESOLUTION
+    target: SearchTarget = SearchTarget()
     round_number: int | None = None
-    #: boundary: the share of passing runs whose crossing along ``along`` is sought (None: pass vs fail per run).
-    pass_rate: float | None = None
-    along: str | None = None
 
 
 @dataclass(frozen=True)
@@ -79,22 +74,22 @@ def _value(run: PastRun, objective: str, maximise: bool) -> float | None:
 
 def _failing(run: PastRun, options: SearchOptions) -> bool | None:
     """Which side of the boundary a run is on: failed, or its objective below the threshold (None: unknown)."""
-    if options.threshold is None:
+    if options.target.threshold is None:
         return run.failed
-    assert options.objective is not None
-    value = _value(run, options.objective, False)
-    return None if value is None else value < options.threshold
+    assert options.target.objective is not None
+    value = _value(run, options.target.objective, False)
+    return None if value is None else value < options.target.threshold
 
 
 def _boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
-    if options.pass_rate is not None:
+    if options.target.pass_rate is not None:
         return _rate_boundary(space, placed, options)
     observations = []
     for run, point in placed:
         failing = _failing(run, options)
         if failing is not None:
             observations.append(Observation(point, failing, run.assignment))
-    proposal = propose_boundary(space, observations, options.samples, options.resolution, options.seed)
+    proposal = propose_boundary(space, observations, options.samples, options.target.resolution, options.seed)
     return proposal.points, Estimate(boundary=proposal.estimate, done=proposal.done), ()
 
 
@@ -115,14 +110,14 @@ def along_axis(space: Space, along: str | None) -> int:
 
 def _rate_boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
     """``--pass-rate R --along KEY``: the level of KEY where the share of passing runs crosses R."""
-    assert options.pass_rate is not None
-    along = along_axis(space, options.along)
+    assert options.target.pass_rate is not None
+    along = along_axis(space, options.target.along)
     runs = []
     for run, point in placed:
         failing = _failing(run, options)
         if failing is not None:
             runs.append(RateRun(point, not failing))
-    proposal = propose_pass_rate(space, runs, along, options.pass_rate, options.samples, options.resolution,
+    proposal = propose_pass_rate(space, runs, along, options.target.pass_rate, options.samples, options.target.resolution,
                                  options.seed)
     found = proposal.boundary
     key = space.keys[along]
@@ -135,21 +130,21 @@ def _rate_boundary(space: Space, placed: Sequence[tuple[PastRun, Point]], option
         if low is not None and high is not None:
             axes[key] = AxisBoundary((low + high) / 2, abs(high - low) / 2, space.axes[along].unit)
     estimate = BoundaryEstimate(axes, located=int(found.located),
-                                pass_rate=PassRateEstimate(options.pass_rate, key, levels))
+                                pass_rate=PassRateEstimate(options.target.pass_rate, key, levels))
     return proposal.points, Estimate(boundary=estimate, done=found.located), ()
 
 
 def _falsify(space: Space, placed: Sequence[tuple[PastRun, Point]], options: SearchOptions) -> StrategyRound:
-    objective = options.objective or MARGIN
+    objective = options.target.objective or MARGIN
     scored = []
     for run, point in placed:
-        value = _value(run, objective, options.maximise)
+        value = _value(run, objective, options.target.maximise)
         if value is not None:
             scored.append(Scored(point, value, run.failed, run.assignment))
     notes: tuple[str, ...] = ()
     if placed and not scored:
         notes = (f"no run read recorded '{objective}': the optimiser starts from scratch",)
-    proposal = propose_falsify(space, scored, options.samples, options.seed, objective, options.maximise,
+    proposal = propose_falsify(space, scored, options.samples, options.seed, objective, options.target.maximise,
                                any(run.failed for run, _ in placed))
     return proposal.points, Estimate(worst=proposal.worst, done=proposal.done), notes
 
@@ -176,11 +171,11 @@ def propose_round(space: Space, history: History, options: SearchOptions) -> Rou
     """The points of one round of ``options.strategy`` over ``space``, from ``history``."""
     if options.strategy not in ADAPTIVE:
         raise SearchError(f"'{options.strategy}' is not an adaptive strategy (one of {', '.join(ADAPTIVE)})")
-    if options.threshold is not None and options.objective is None:
+    if options.target.threshold is not None and options.target.objective is None:
         raise SearchError("--threshold needs --objective NAME: the record() item whose values cross it")
-    if options.along is not None and options.pass_rate is None:
+    if options.target.along is not None and options.target.pass_rate is None:
         raise SearchError("--along goes with --pass-rate R: the rate whose crossing along it is sought")
-    if options.pass_rate is not None and options.strategy != "boundary":
+    if options.target.pass_rate is not None and options.strategy != "boundary":
         raise SearchError(f"--pass-rate is an option of --strategy boundary, not of {options.strategy}")
     placed = _placed(space, history)
     if options.strategy == "boundary":
@@ -191,8 +186,8 @@ def propose_round(space: Space, history: History, options: SearchOptions) -> Rou
         points, estimate, notes = _holes(space, history, placed, options)
     number = options.round_number or max(history.last_round, FIRST_ROUND - 1) + 1
     record = RoundRecord(number, options.strategy, options.sources, len(history.runs), estimate,
-                         options.objective if options.strategy != "falsify" else options.objective or MARGIN,
-                         options.maximise)
+                         options.target.objective if options.strategy != "falsify" else options.target.objective or MARGIN,
+                         options.target.maximise)
     left_out = len(history.finished) - len(placed)
     extra = (f"{left_out} run(s) whose values lie outside the variation's axes were left out",) if left_out else ()
     return RoundProposal(points, record, history.notes + extra + notes)

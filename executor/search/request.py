@@ -12,8 +12,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
-from coverage_engine.search import DEFAULT_RESOLUTION
+from coverage_engine.search.target import SearchTarget
 from executor.batch.errors import BatchUsageError
+
+#: The names of the goal options, kept flat in ``search.json``'s settings beside the others.
+_TARGET_NAMES = frozenset(field.name for field in fields(SearchTarget))
 
 
 @dataclass(frozen=True)
@@ -25,13 +28,7 @@ class SearchSettings:
     budget: int
     round_size: int
     seed: int
-    objective: str | None = None
-    maximise: bool = False
-    threshold: float | None = None
-    resolution: float = DEFAULT_RESOLUTION
-    #: boundary: the share of passing runs whose crossing along ``along`` (a varied parameter) is sought.
-    pass_rate: float | None = None
-    along: str | None = None
+    target: SearchTarget = SearchTarget()
     #: How each round's jobs run: the launch command (empty: the built-in runner) and the batch's limits.
     command: tuple[str, ...] = ()
     timeout: float | None = None
@@ -40,22 +37,31 @@ class SearchSettings:
     simulation: str | None = None
 
     def document(self) -> dict[str, Any]:
-        """The settings as the ``settings`` object of ``search.json``."""
-        document = {f.name: getattr(self, f.name) for f in fields(self)}
+        """The settings as the ``settings`` object of ``search.json`` (the goal options flat among them)."""
+        document: dict[str, Any] = {}
+        for field in fields(self):
+            if field.name == "target":
+                document.update(self.target.document())
+            else:
+                document[field.name] = getattr(self, field.name)
         document["command"] = list(self.command)
         return document
+
+    def setting(self, name: str) -> Any:
+        """One setting by its name in ``search.json`` (a goal option's is the target's)."""
+        return getattr(self.target, name) if name in _TARGET_NAMES else getattr(self, name)
 
     @classmethod
     def from_document(cls, document: Mapping[str, Any]) -> SearchSettings | None:
         """The settings kept in a ``search.json`` (None when they are missing or malformed)."""
-        known = {f.name for f in fields(cls)}
-        values = {k: v for k, v in document.items() if k in known}
+        known = {f.name for f in fields(cls)} - {"target"}
+        values: dict[str, Any] = {k: v for k, v in document.items() if k in known}
         command = values.get("command", [])
         if not isinstance(command, list) or not all(isinstance(part, str) for part in command):
             return None
         values["command"] = tuple(command)
         try:
-            settings = cls(**values)
+            settings = cls(**values, target=SearchTarget.from_document(document))
         except TypeError:
             return None
         ok = (isinstance(settings.scenario, str) and isinstance(settings.goal, str)
@@ -92,9 +98,9 @@ def resumed(request: SearchRequest, kept: SearchSettings) -> SearchRequest:
     """``request`` with the settings of the search it resumes; a typed setting that differs is refused
     (except the budget), as ``scenario_batch_execution --resume`` refuses options that differ."""
     given = request.settings
-    differences = [f"{_flag(name)} {_shown(getattr(given, name))} (the search has {_shown(getattr(kept, name))})"
+    differences = [f"{_flag(name)} {_shown(given.setting(name))} (the search has {_shown(kept.setting(name))})"
                    for name in request.typed
-                   if name not in RESUMABLE_CHANGES and getattr(given, name) != getattr(kept, name)]
+                   if name not in RESUMABLE_CHANGES and given.setting(name) != kept.setting(name)]
     if differences:
         raise BatchUsageError("--resume: the search was started with other settings; it keeps them, so leave "
                               "these out or start a new search in another folder: " + "; ".join(differences))

@@ -98,9 +98,7 @@ def variation_request(request: SearchRequest, place: RoundPlace, strategy: str, 
                                  debug=request.debug, round_number=place.number)
     if not sources:
         return variation
-    return replace(variation, from_results=tuple(str(s) for s in sources), objective=settings.objective,
-                   maximise=settings.maximise, threshold=settings.threshold, resolution=settings.resolution,
-                   pass_rate=settings.pass_rate, along=settings.along)
+    return replace(variation, from_results=tuple(str(s) for s in sources), target=settings.target)
 
 
 def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummary, ...]) -> SearchRecord:
@@ -112,9 +110,8 @@ def final_estimate(request: SearchRequest, folder: Path, done: tuple[RoundSummar
     settings = request.settings
     last = done[-1].round
     sources = tuple(str(RoundPlace.of(str(folder), r.round).results) for r in done)
-    options = SearchOptions(settings.goal, settings.round_size, settings.seed + last, sources, settings.objective,
-                            settings.maximise, settings.threshold, settings.resolution, last,
-                            pass_rate=settings.pass_rate, along=settings.along)
+    options = SearchOptions(settings.goal, settings.round_size, settings.seed + last, sources, settings.target,
+                            round_number=last)
     return estimate_only(Path(settings.scenario), options)
 
 

@@ -149,9 +149,8 @@ def _search(parsed: ParsedVariation, request: VariationRequest, seed: int) -> Ad
     if request.samples is None:
         raise SearchError(f"--strategy {request.strategy} needs --samples N (how many variants to propose)",
                           Location.whole_file(str(parsed.path)))
-    options = SearchOptions(request.strategy, request.samples, seed, request.from_results, request.objective,
-                            request.maximise, request.threshold, request.resolution, request.round_number,
-                            request.pass_rate, request.along)
+    options = SearchOptions(request.strategy, request.samples, seed, request.from_results, request.target,
+                            request.round_number)
     return adaptive_round(parsed, options, request.store if request.from_store else None)
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from coverage_engine.search import ADAPTIVE, DEFAULT_RESOLUTION
+from coverage_engine.search import ADAPTIVE
+from coverage_engine.search.target import SearchTarget
 
 #: Default of ``--max-variants``: more combinations than this are refused unless the limit is raised.
 DEFAULT_MAX_VARIANTS = 10_000_000
@@ -31,16 +32,10 @@ class VariationRequest:
     only_new: bool = False
     #: Results folders of earlier runs an adaptive strategy (boundary, fill-holes, falsify) proposes from.
     from_results: tuple[str, ...] = ()
-    #: falsify: the record() item to minimise (or ``margin``); boundary with ``threshold``: the item that crosses it.
-    objective: str | None = None
-    maximise: bool = False
-    threshold: float | None = None
-    resolution: float = DEFAULT_RESOLUTION
+    #: What the adaptive strategy looks for (``--objective``, ``--threshold``, ``--pass-rate``, …).
+    target: SearchTarget = SearchTarget()
     #: The round written in each variant's proposal line; None: one more than the highest round read.
     round_number: int | None = None
-    #: boundary: the share of passing runs whose crossing along ``along`` (a varied parameter) is sought.
-    pass_rate: float | None = None
-    along: str | None = None
     #: Read ``from_results`` from the store (``store``): each names a batch by its output folder.
     from_store: bool = False
 
@@ -55,7 +50,5 @@ class VariationRequest:
                 "list": self.list_only, "scenario_parameter_file": self.parameter_file,
                 "max_variants": self.max_variants, "source": str(source), "strategy": self.strategy,
                 "strength": self.strength, "samples": self.samples, "seed": seed, "only_new": self.only_new,
-                **({"from": list(self.from_results), "objective": self.objective, "maximise": self.maximise,
-                    "threshold": self.threshold, "resolution": self.resolution, "round": self.round_number,
-                    "from_store": self.from_store, "pass_rate": self.pass_rate, "along": self.along}
-                   if self.adaptive else {})}
+                **({"from": list(self.from_results), **self.target.document(), "round": self.round_number,
+                    "from_store": self.from_store} if self.adaptive else {})}

@@ -97,7 +97,7 @@ def _history(parsed: ParsedVariation, space: Space, options: SearchOptions, resu
     ``results_store`` the batches of that store written into them (the margins read only for falsify on it)."""
     from coverage_engine.search.history import MARGIN, read_history
 
-    margins = options.strategy == "falsify" and options.objective in (None, MARGIN)
+    margins = options.strategy == "falsify" and options.target.objective in (None, MARGIN)
     if results_store is not None:
         from executor.variation.stored_results import read_stored_history
 

@@ -1,6 +1,6 @@
 """The worker loop's inbox: events from job threads and the fork server's replies, waited for together.
 
-The loop waits in one ``select`` on a wake-up pipe, the fork server's socket and the launched
+The loop waits in one ``poll`` on a wake-up pipe, the fork server's socket and the launched
 children's process descriptors. A job thread (a job with ``--post-run`` hooks or an echoed output)
 puts its event here and writes a byte to the pipe; the server's replies are read by the loop itself
 (:meth:`ForkServer.poll <executor.batch.builtin_runner.ForkServer.poll>`), as are the children's

@@ -118,6 +118,10 @@ def test_a_search_in_a_folder_that_holds_one_is_refused(tmp_path):
     assert "Traceback" not in again.stderr
     resumed = search("--resume", "--goal", "falsify", "-o", "s", cwd=tmp_path)
     assert resumed.returncode == 2 and "--goal falsify (the search has boundary)" in resumed.stderr
+    other_goal = search("--resume", "--resolution", "0.05", "--pass-rate", "0.5", "-o", "s", cwd=tmp_path)
+    assert other_goal.returncode == 2, other_goal.stdout + other_goal.stderr
+    assert "--resolution 0.05 (the search has 0.01)" in other_goal.stderr
+    assert "--pass-rate 0.5 (the search has None)" in other_goal.stderr
 
 
 def test_a_scenario_that_does_not_parse_is_a_located_error_and_leaves_no_search(tmp_path):

@@ -47,6 +47,7 @@ from coverage_engine.search.history import History, PastRun
 from coverage_engine.search.propose import SearchOptions, propose_round
 from coverage_engine.search.space import Point, Space
 from coverage_engine.search.surface import fit_surface
+from coverage_engine.search.target import SearchTarget
 from coverage_engine.variation.design import unit_columns
 
 BIN = Path(sys.executable).parent
@@ -87,8 +88,8 @@ def search(scenario: Braking, strategy: str, first: int, per_round: int, seed: i
     runs = [scenario.run(tuple(p), i, 1) for i, p in enumerate(zip(*columns, strict=True))]
     record = None
     for number in range(2, MAX_ROUNDS + 2):
-        options = SearchOptions(strategy, per_round, seed * 1000 + number, (), objective=objective,
-                                resolution=RESOLUTION)
+        options = SearchOptions(strategy, per_round, seed * 1000 + number, (),
+                                SearchTarget(objective=objective, resolution=RESOLUTION))
         proposal = propose_round(scenario.space, History(tuple(runs)), options)
         record = proposal.record
         if stop(runs, record) or not proposal.points:

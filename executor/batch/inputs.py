@@ -10,7 +10,7 @@ import hashlib
 import os
 import re
 import shutil
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -134,19 +134,15 @@ def _content(path: Path) -> tuple[str, str | None]:
         asked = min(os.fstat(handle.fileno()).st_size, MAX_STORED_TEXT) + 1
         head = handle.read(asked)
         digest = hashlib.sha256(head)
-        # fewer bytes than asked: the end was reached; else the file is large, or grew since fstat
-        rest: Iterator[bytes] = iter(lambda: handle.read(MAX_STORED_TEXT), b"") if len(head) == asked else iter(())
-        for chunk in rest:
-            digest.update(chunk)
-            if len(head) + len(chunk) > MAX_STORED_TEXT:
-                for chunk in rest:
-                    digest.update(chunk)
-                return digest.hexdigest(), None
-            head += chunk
-        if len(head) > MAX_STORED_TEXT:
-            return digest.hexdigest(), None
+        kept: bytes | None = head if len(head) <= MAX_STORED_TEXT else None     # at most this much is held
+        if len(head) == asked:         # not at its end yet: a large file, or one that grew since fstat
+            for chunk in iter(lambda: handle.read(MAX_STORED_TEXT), b""):
+                digest.update(chunk)
+                kept = kept + chunk if kept is not None and len(kept) + len(chunk) <= MAX_STORED_TEXT else None
+    if kept is None:
+        return digest.hexdigest(), None
     try:
-        text = head.decode("utf-8")
+        text = kept.decode("utf-8")
     except UnicodeDecodeError:
         return digest.hexdigest(), None
     return digest.hexdigest(), None if "\x00" in text else text

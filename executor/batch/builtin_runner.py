@@ -235,8 +235,9 @@ class ForkServer:
         """Send a spawn request without waiting for its start (the worker's own loop, no thread per job);
         returns the request's id (for :meth:`withdraw`).
 
-        ``reply`` is called from the reader thread with each of the server's messages on the request, in
-        order: ``started`` (``pid``), ``failed`` (``reason``, ``errno``, ``folder``) or ``withdrawn``, then
+        ``reply`` is called by whoever reads the replies (the worker's loop through :meth:`poll`, or the
+        reader thread once a thread waits in :meth:`spawn`) with each of the server's messages on the
+        request, in order: ``started`` (``pid``), ``failed`` (``reason``, ``errno``, ``folder``) or ``withdrawn``, then
         ``exited`` (the raw wait ``status``); ``{"event": "gone"}`` when the server ended before it could
         say more (a job it had started was killed with it). :class:`ForkServerError` when the request
         cannot be sent."""

@@ -149,3 +149,26 @@ def test_result_file_names_and_scenario_suffixes_are_each_defined_once():
             copies += [f"{path.relative_to(ROOT)}:{node.lineno}: {node.value!r}" for node in ast.walk(tree)
                        if isinstance(node, ast.Constant) and node.value in _ONCE and id(node) not in docs]
     assert copies == []
+
+
+def test_a_document_read_again_gives_equal_cases_that_callers_may_change_alone():
+    """A batch reads each job's report twice (judging, then merging): the second read is a lookup, and
+    its list is the caller's own."""
+    first = read_cases(TWO_SUITES)
+    first.clear()
+    again = read_cases(TWO_SUITES)
+    assert [case.name for case in again] == ["one", "two", "three"]
+    assert again == read_cases(TWO_SUITES) and again is not read_cases(TWO_SUITES)
+
+
+def test_the_documents_kept_for_a_second_read_stay_within_their_bound():
+    from coverage_engine.results.read import _Recent
+
+    recent = _Recent(limit=100)
+    recent.keep("a" * 60, ())
+    recent.keep("b" * 30, ())
+    assert recent.get("a" * 60) == () and recent.get("b" * 30) == ()
+    recent.keep("c" * 20, ())                       # over the bound: it starts again
+    assert recent.get("a" * 60) is None and recent.get("c" * 20) == ()
+    recent.keep("d" * 101, ())                      # larger than the bound: never kept
+    assert recent.get("d" * 101) is None and recent.get("c" * 20) == ()

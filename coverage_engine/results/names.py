@@ -30,6 +30,7 @@ MAX_NAME_CHARS = 120
 _ELLIPSIS = "…"
 
 
+@functools.lru_cache(maxsize=256)
 def scenario_classname(source_file: str, scenario: str | None) -> str:
     """``<stem of the source .osc>.<scenario>`` (just the stem when the scenario is not known)."""
     stem = PurePath(source_file).stem or source_file

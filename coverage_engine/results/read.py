@@ -17,6 +17,7 @@ then to merge the report).
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -78,10 +79,51 @@ def _case(element: Any) -> Case:
                 stdout=None if out is None else out.text, stderr=None if err is None else err.text)
 
 
+class _Recent:
+    """The testcases of the documents read lately, by their text: a batch reads each job's report twice (to
+    judge the job, then to merge the report) and the second read is then a lookup. Bounded by the text
+    held (:data:`RECENT_CHARS`: when full it starts again empty); :class:`Case` is immutable, so the
+    cases are shared."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self._cases: dict[str, tuple[Case, ...]] = {}
+        self._chars = 0
+        self._lock = threading.Lock()
+
+    def get(self, text: str) -> tuple[Case, ...] | None:
+        return self._cases.get(text)
+
+    def keep(self, text: str, cases: tuple[Case, ...]) -> None:
+        if len(text) > self.limit:
+            return
+        with self._lock:
+            if self._chars + len(text) > self.limit:
+                self._cases.clear()
+                self._chars = 0
+            self._cases[text] = cases
+            self._chars += len(text)
+
+
+#: Most characters of report text :data:`_RECENT` holds (a 2,000-job batch's small reports fit many times).
+RECENT_CHARS = 4 * 1024 * 1024
+
+_RECENT = _Recent(RECENT_CHARS)
+
+
 def read_cases(xml_text: str) -> list[Case]:
     """The testcases of a JUnit document (``<testsuites>`` or a single ``<testsuite>``), in document order."""
     if not isinstance(xml_text, str):      # bytes could hide a declaration in another encoding from the check
         raise TypeError(f"read_cases reads text, not {type(xml_text).__name__}")
+    known = _RECENT.get(xml_text)
+    if known is not None:
+        return list(known)
+    cases = _parse_cases(xml_text)
+    _RECENT.keep(xml_text, tuple(cases))
+    return cases
+
+
+def _parse_cases(xml_text: str) -> list[Case]:
     try:
         root = StdET.fromstring(xml_text) if _DOCTYPE not in xml_text else SafeET.fromstring(xml_text)
     except (SafeET.ParseError, DefusedXmlException, ValueError) as exc:

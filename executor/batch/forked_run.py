@@ -44,7 +44,7 @@ class ForkedRun(LoopRun):
 
     def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
         self._request = self.server.submit(argv, cwd=self.cwd, environment=environment,
-                                           log_path=os.path.abspath(self.output_dir / LOG_FILE), append=False,
+                                           log_path=os.path.join(os.path.abspath(self.output_dir), LOG_FILE), append=False,
                                            log_folder=self.folder_root, reply=self._reply)
         return []
 

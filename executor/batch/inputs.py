@@ -170,7 +170,7 @@ _ESCAPED_BYTE = re.compile(r"\\x([89a-f][0-9a-f])")
 def not_utf8_reason(scenario_path: str) -> str | None:
     """Why a job cannot run when its recorded path is a name that is not UTF-8, kept escaped (``c\\xff.osc``):
     the escaped path does not exist and the file of the raw bytes does. None for every other path."""
-    if os.path.lexists(scenario_path) or not _ESCAPED_BYTE.search(scenario_path):
+    if not _ESCAPED_BYTE.search(scenario_path) or os.path.lexists(scenario_path):
         return None
     raw = _ESCAPED_BYTE.sub(lambda m: chr(0xDC00 + int(m.group(1), 16)), scenario_path)
     if not os.path.lexists(raw):

@@ -7,6 +7,7 @@ which writes them. Earlier attempts' logs are kept: before attempt n the previou
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from collections.abc import Mapping
@@ -80,9 +81,9 @@ def rotate_log(output_dir: Path, attempt: int) -> Path | None:
     A log of an earlier batch in the same job folder (``--rerun-failed``, a new batch into the same
     ``-o``) is kept too, under the first free ``log.<n>.txt``: nothing written is lost.
     """
-    log = output_dir / LOG_FILE
-    if not log.exists():
+    if not os.path.exists(os.path.join(output_dir, LOG_FILE)):     # (the common case, without pathlib)
         return None
+    log = output_dir / LOG_FILE
     number = max(attempt - 1, 1)
     while (output_dir / f"log.{number}.txt").exists():
         number += 1
@@ -117,7 +118,8 @@ def not_started(output_dir: Path, kept_log: Path | None, made_folder: bool, lost
 
 def attempt_marks(output_dir: Path) -> tuple[FileMark, FileMark]:
     """How ``test.xml`` and ``coverage.json`` look before an attempt (a stale one is not taken as its own)."""
-    return FileMark.of(output_dir / RESULT_FILE), FileMark.of(output_dir / COVERAGE_FILE)
+    folder = os.fspath(output_dir)
+    return FileMark.of(os.path.join(folder, RESULT_FILE)), FileMark.of(os.path.join(folder, COVERAGE_FILE))
 
 
 def refuse_unusable(output_dir: Path, scenario_path: str) -> JobResult | None:

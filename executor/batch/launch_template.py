@@ -14,6 +14,7 @@ runs, with the form that is safe: pass the value to the script as an argument (`
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 from collections.abc import Sequence
@@ -87,8 +88,14 @@ class Template:
 
 
 def substitute(command: Sequence[str], scenario: str, output_dir: str) -> Launch:
-    """``Template.of(command).fill(scenario, output_dir)``: one job's arguments and environment."""
-    return Template.of(command).fill(scenario, output_dir)
+    """``Template.of(command).fill(scenario, output_dir)``: one job's arguments and environment (a batch's
+    command is checked once, not once per job)."""
+    return _template(tuple(command)).fill(scenario, output_dir)
+
+
+@functools.lru_cache(maxsize=16)
+def _template(command: tuple[str, ...]) -> Template:
+    return Template.of(command)
 
 
 def _shell_script(command: tuple[str, ...]) -> tuple[int, int | None]:

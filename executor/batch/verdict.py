@@ -10,6 +10,7 @@ neither: it is ``cancelled`` with :data:`DISK_FULL_REASON` (the batch stops; ``-
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 from dataclasses import dataclass
@@ -50,14 +51,19 @@ class FileMark:
     signature: tuple[int, int, int] | None
 
     @classmethod
-    def of(cls, path: Path) -> FileMark:
+    def of(cls, path: str | os.PathLike[str]) -> FileMark:
         try:
-            st = path.stat()
+            st = os.stat(path)
         except OSError:
             return cls(None)
+        return cls.of_status(st)
+
+    @classmethod
+    def of_status(cls, st: os.stat_result) -> FileMark:
+        """The mark of a file whose status is at hand (an open file's ``fstat``)."""
         return cls((st.st_mtime_ns, st.st_size, st.st_ino))
 
-    def changed(self, path: Path) -> bool:
+    def changed(self, path: str | os.PathLike[str]) -> bool:
         return FileMark.of(path).signature not in (None, self.signature)
 
 
@@ -74,7 +80,8 @@ class ChildFile:
     data: bytes | None
 
 
-def read_child_file(path: Path, *, limit: int | None = None, tail: int | None = None) -> ChildFile:
+def read_child_file(path: str | os.PathLike[str], *, limit: int | None = None,
+                    tail: int | None = None) -> ChildFile:
     """Read a file a child wrote without following a symbolic link: a child (or anyone who can write into its
     folder) could otherwise make ``test.xml`` point at a secret that the report would carry.
 
@@ -82,12 +89,23 @@ def read_child_file(path: Path, *, limit: int | None = None, tail: int | None = 
     With plain descriptor calls (open, fstat, one read): a buffered file object costs five more system
     calls, and a batch reads two or three of these files per job.
     """
+    read = read_new_child_file(path, None, limit=limit, tail=tail)
+    assert read is not None                      # (only a mark makes it None)
+    return read
+
+
+def read_new_child_file(path: str | os.PathLike[str], mark: FileMark | None, *, limit: int | None = None,
+                        tail: int | None = None) -> ChildFile | None:
+    """:func:`read_child_file`, or None when the file is still the one ``mark`` saw before the attempt (not
+    written by it): the open file's own status tells, so a file that is read costs no ``stat`` of its own."""
     # O_NONBLOCK: a FIFO left in the file's place must not hold the batch in open() (it is refused below)
     fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
     try:
         status = os.fstat(fd)
+        if mark is not None and FileMark.of_status(status) == mark:
+            return None
         if not stat.S_ISREG(status.st_mode):
-            raise NotARegularFile(f"{path.name} is not a regular file")
+            raise NotARegularFile(f"{os.path.basename(path)} is not a regular file")
         size = status.st_size
         if limit is not None and size > limit:
             return ChildFile(size, None)
@@ -109,7 +127,7 @@ def _read_from(fd: int, start: int, length: int) -> bytes:
     return data
 
 
-def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
+def log_tail(path: str | os.PathLike[str], limit: int = LOG_TAIL_BYTES) -> str:
     """The last ``limit`` bytes of a log, decoded leniently and cleaned for XML and the store."""
     try:
         read = read_child_file(path, tail=limit)
@@ -121,16 +139,22 @@ def log_tail(path: Path, limit: int = LOG_TAIL_BYTES) -> str:
     return clean_text(text)
 
 
-def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[Case], str | None]:
+#: Why an attempt's test.xml is not taken when the attempt wrote none (or left an earlier one as it was).
+NOT_WRITTEN = "no test.xml written"
+
+
+def read_result(path: str | os.PathLike[str], mark: FileMark) -> tuple[str | None, list[Case], str | None]:
     """The test.xml the attempt wrote (text or None, its testcases) and why it cannot be used (None if it can)."""
-    if not mark.changed(path):
-        return None, [], "no test.xml written"
-    if path.is_symlink():
-        return None, [], "test.xml is a symbolic link: not followed (a result must be a file in the job's folder)"
     try:
-        read = read_child_file(path, limit=JUNIT_MAX_BYTES)
+        read = read_new_child_file(path, mark, limit=JUNIT_MAX_BYTES)
     except OSError as exc:
+        if not mark.changed(path):               # none there, or one left as it was (a link is followed here)
+            return None, [], NOT_WRITTEN
+        if exc.errno == errno.ELOOP:             # O_NOFOLLOW met a link
+            return None, [], "test.xml is a symbolic link: not followed (a result must be a file in the job's folder)"
         return None, [], f"cannot read test.xml: {exc.strerror or exc}"
+    if read is None:
+        return None, [], NOT_WRITTEN
     if read.data is None:
         return None, [], f"test.xml is {read.size} bytes, more than the {JUNIT_MAX_BYTES} bytes kept"
     text = read.data.decode("utf-8", errors="replace")
@@ -143,25 +167,25 @@ def read_result(path: Path, mark: FileMark) -> tuple[str | None, list[Case], str
     return clean_text(text), cases, None
 
 
-def read_coverage(path: Path, mark: FileMark) -> str | None:
+def read_coverage(path: str | os.PathLike[str], mark: FileMark) -> str | None:
     """COVERAGE HOOK — the one place a job's ``coverage.json`` is read, beside its ``test.xml``.
 
     The text the attempt wrote (None when it wrote none, or more than :data:`COVERAGE_MAX_BYTES`), handed
     on with the result (:attr:`JobResult.coverage_json`); the coverage model records it with the job.
     """
-    if not mark.changed(path):
-        return None
     try:
-        read = read_child_file(path, limit=COVERAGE_MAX_BYTES)
+        read = read_new_child_file(path, mark, limit=COVERAGE_MAX_BYTES)
     except OSError:
         return None
-    return None if read.data is None else read.data.decode("utf-8", errors="replace")
+    return None if read is None or read.data is None else read.data.decode("utf-8", errors="replace")
 
 
-def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_return_value: bool = False,
-          timeout: float | None = None, coverage_mark: FileMark | None = None) -> JobResult:
+def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: FileMark, *,
+          ignore_return_value: bool = False, timeout: float | None = None,
+          coverage_mark: FileMark | None = None) -> JobResult:
     """The result of one attempt, ready to be written to the store (with its coverage.json, if any)."""
-    xml_text, cases, unreadable = read_result(output_dir / RESULT_FILE, mark)
+    folder = os.fspath(output_dir)
+    xml_text, cases, unreadable = read_result(os.path.join(folder, RESULT_FILE), mark)
     rc = outcome.returncode
     if outcome.cancelled:
         status, reason = JobState.CANCELLED, "cancelled"
@@ -179,25 +203,28 @@ def judge(outcome: ProcessOutcome, output_dir: Path, mark: FileMark, *, ignore_r
         status, reason = JobState.ERROR, f"exit code {rc} although its test.xml passed"
     else:
         status, reason = JobState.PASSED, None
-    if status is JobState.ERROR and (outcome.disk_full or out_of_space(output_dir)):
+    if status is JobState.ERROR and (outcome.disk_full or out_of_space(Path(folder))):
         status, reason = JobState.CANCELLED, DISK_FULL_REASON
+    log = os.path.join(folder, LOG_FILE)
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,
                      finished_at=outcome.finished_at, reason=reason, junit_xml=xml_text,
-                     log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
-                     log_path=str(output_dir / LOG_FILE),
-                     coverage_json=None if coverage_mark is None else read_coverage(output_dir / COVERAGE_FILE,
-                                                                                    coverage_mark))
+                     log_tail=log_tail(log), output_dir=folder, log_path=log,
+                     coverage_json=None if coverage_mark is None else read_coverage(
+                         os.path.join(folder, COVERAGE_FILE), coverage_mark))
 
 
-def launch_failure(output_dir: Path, started_at: float, finished_at: float, message: str) -> JobResult:
+def launch_failure(output_dir: str | os.PathLike[str], started_at: float, finished_at: float,
+                   message: str) -> JobResult:
     """The result of an attempt whose command could not even be started."""
+    folder = os.fspath(output_dir)
+    log = os.path.join(folder, LOG_FILE)
     return JobResult(status=JobState.ERROR, exit_code=None, started_at=started_at, finished_at=finished_at,
-                     reason=message, log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
-                     log_path=str(output_dir / LOG_FILE))
+                     reason=message, log_tail=log_tail(log), output_dir=folder, log_path=log)
 
 
-def disk_full_result(output_dir: Path, started_at: float, finished_at: float) -> JobResult:
+def disk_full_result(output_dir: str | os.PathLike[str], started_at: float, finished_at: float) -> JobResult:
     """The result of an attempt the full disk kept from running or from writing its result."""
+    folder = os.fspath(output_dir)
+    log = os.path.join(folder, LOG_FILE)
     return JobResult(status=JobState.CANCELLED, exit_code=None, started_at=started_at, finished_at=finished_at,
-                     reason=DISK_FULL_REASON, log_tail=log_tail(output_dir / LOG_FILE), output_dir=str(output_dir),
-                     log_path=str(output_dir / LOG_FILE))
+                     reason=DISK_FULL_REASON, log_tail=log_tail(log), output_dir=folder, log_path=log)

@@ -1,0 +1,67 @@
+"""How an attempt's files are read when it is judged (executor.batch.verdict): a file left from before the
+attempt is not taken as its own, a link or a FIFO is refused without being followed or waited on, and a
+new file is read from the descriptor that was opened (no second look at the path)."""
+
+from __future__ import annotations
+
+import os
+
+from coverage_engine.results.files import COVERAGE_FILE, RESULT_FILE
+from executor.batch.verdict import NOT_WRITTEN, FileMark, read_coverage, read_result
+
+PASSED = '<testsuite><testcase name="t"/></testsuite>'
+
+
+def _marked(folder, name=RESULT_FILE):
+    path = folder / name
+    return path, FileMark.of(str(path))
+
+
+def test_no_file_and_a_file_left_as_it_was_are_both_not_written(tmp_path):
+    path, mark = _marked(tmp_path)
+    assert read_result(str(path), mark) == (None, [], NOT_WRITTEN)
+    path.write_text(PASSED)
+    stale = FileMark.of(str(path))
+    assert read_result(str(path), stale) == (None, [], NOT_WRITTEN)
+
+
+def test_a_file_the_attempt_wrote_is_read_with_its_cases(tmp_path):
+    path, mark = _marked(tmp_path)
+    path.write_text(PASSED)
+    text, cases, problem = read_result(str(path), mark)
+    assert problem is None and text == PASSED and [case.name for case in cases] == ["t"]
+
+
+def test_a_file_rewritten_by_the_attempt_counts_even_where_one_was_before(tmp_path):
+    path = tmp_path / RESULT_FILE
+    path.write_text(PASSED)
+    mark = FileMark.of(str(path))
+    replacement = tmp_path / "new.xml"
+    replacement.write_text(PASSED.replace('"t"', '"u"'))
+    os.replace(replacement, path)                     # another inode: a new file
+    _, cases, problem = read_result(str(path), mark)
+    assert problem is None and [case.name for case in cases] == ["u"]
+
+
+def test_a_link_made_by_the_attempt_is_refused_and_one_left_from_before_is_not_its_own(tmp_path):
+    secret = tmp_path / "secret.xml"
+    secret.write_text(PASSED)
+    path, mark = _marked(tmp_path)
+    path.symlink_to(secret)
+    text, cases, problem = read_result(str(path), mark)
+    assert text is None and cases == [] and problem is not None and "symbolic link: not followed" in problem
+    assert read_result(str(path), FileMark.of(str(path))) == (None, [], NOT_WRITTEN)
+
+
+def test_a_fifo_is_refused_without_waiting_for_a_writer(tmp_path):
+    path, mark = _marked(tmp_path)
+    os.mkfifo(path)
+    assert read_result(str(path), mark) == (None, [], "cannot read test.xml: test.xml is not a regular file")
+
+
+def test_a_coverage_file_is_read_only_when_the_attempt_wrote_it(tmp_path):
+    path, mark = _marked(tmp_path, COVERAGE_FILE)
+    assert read_coverage(str(path), mark) is None
+    path.write_text('{"a": 1}')
+    assert read_coverage(str(path), mark) == '{"a": 1}'
+    assert read_coverage(str(path), FileMark.of(str(path))) is None

@@ -83,4 +83,4 @@ def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0) -> tuple[dict
         for fd in fds:
             os.close(fd)
         return None, []
-    return json.loads(data), list(fds)
+    return json.loads(data.decode()), list(fds)     # (text: bytes would have their encoding guessed each time)

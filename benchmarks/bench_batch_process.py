@@ -132,7 +132,10 @@ for i in range(20000):
 def reference(env: dict[str, str]) -> float:
     """Own CPU seconds of :data:`REFERENCE` in a fresh interpreter (see the module doc)."""
     proc = subprocess.Popen([sys.executable, "-c", REFERENCE], env=env)
-    return own_cpu_at_exit(proc)
+    cpu = own_cpu_at_exit(proc)
+    if proc.returncode != 0:
+        raise SystemExit(f"the reference workload failed ({proc.returncode})")
+    return cpu
 
 
 def run(argv: Sequence[str], cwd: Path, env: dict[str, str]) -> Measured:
@@ -243,7 +246,8 @@ def main() -> int:
         best: dict[tuple[str, str], Measured] = {}
 
         def keep(key: tuple[str, str], measured: Measured) -> None:
-            """The best run of each kind: the least own CPU for the CPU figure, the shortest wall time else."""
+            """The best run of each kind: the least own CPU for the CPU figure (its wall time is that run's),
+            the shortest wall time else."""
             figure = measured.cpu if key[1] in ("cpu", "reference") else measured.wall
             if key not in best or figure < (best[key].cpu if key[1] in ("cpu", "reference") else best[key].wall):
                 best[key] = measured

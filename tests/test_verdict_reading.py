@@ -65,3 +65,18 @@ def test_a_coverage_file_is_read_only_when_the_attempt_wrote_it(tmp_path):
     path.write_text('{"a": 1}')
     assert read_coverage(str(path), mark) == '{"a": 1}'
     assert read_coverage(str(path), FileMark.of(str(path))) is None
+
+
+def test_an_earlier_log_is_kept_and_a_folder_that_cannot_be_looked_at_is_not_taken_for_an_empty_one(tmp_path):
+    from pathlib import Path
+
+    import pytest
+
+    from executor.batch.job_run import rotate_log
+
+    assert rotate_log(tmp_path / "new", 1) is None               # no folder yet, no log: nothing to keep
+    (tmp_path / "log.txt").write_text("first")
+    kept = rotate_log(tmp_path, 2)
+    assert kept == tmp_path / "log.1.txt" and kept.read_text() == "first" and not (tmp_path / "log.txt").exists()
+    with pytest.raises(OSError):                                 # ENAMETOOLONG: not "no log there"
+        rotate_log(Path(tmp_path) / ("x" * 300), 2)

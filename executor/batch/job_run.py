@@ -7,6 +7,7 @@ which writes them. Earlier attempts' logs are kept: before attempt n the previou
 
 from __future__ import annotations
 
+import errno
 import os
 import threading
 import time
@@ -74,6 +75,10 @@ def job_marker(job_id: int, attempt: int) -> str:
     return f"{job_id}.{attempt}"
 
 
+#: The errors that mean "no such file" when a path is looked at (those ``Path.exists`` answers False to).
+_ABSENT = frozenset({errno.ENOENT, errno.ENOTDIR, errno.EBADF, errno.ELOOP})
+
+
 def rotate_log(output_dir: Path, attempt: int) -> Path | None:
     """Keep the log of the previous attempt under ``log.<attempt-1>.txt`` before a new attempt starts;
     returns where it went (None: there was none).
@@ -81,8 +86,12 @@ def rotate_log(output_dir: Path, attempt: int) -> Path | None:
     A log of an earlier batch in the same job folder (``--rerun-failed``, a new batch into the same
     ``-o``) is kept too, under the first free ``log.<n>.txt``: nothing written is lost.
     """
-    if not os.path.exists(os.path.join(output_dir, LOG_FILE)):     # (the common case, without pathlib)
-        return None
+    try:
+        os.stat(os.path.join(output_dir, LOG_FILE))     # (the common case, none there, without pathlib)
+    except OSError as exc:
+        if exc.errno in _ABSENT:
+            return None
+        raise                                   # as Path.exists: a folder that cannot be read is a problem
     log = output_dir / LOG_FILE
     number = max(attempt - 1, 1)
     while (output_dir / f"log.{number}.txt").exists():

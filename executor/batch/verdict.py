@@ -150,7 +150,7 @@ def read_result(path: str | os.PathLike[str], mark: FileMark) -> tuple[str | Non
     except OSError as exc:
         if not mark.changed(path):               # none there, or one left as it was (a link is followed here)
             return None, [], NOT_WRITTEN
-        if exc.errno == errno.ELOOP:             # O_NOFOLLOW met a link
+        if exc.errno == errno.ELOOP or os.path.islink(path):     # O_NOFOLLOW met a link (ELOOP on Linux)
             return None, [], "test.xml is a symbolic link: not followed (a result must be a file in the job's folder)"
         return None, [], f"cannot read test.xml: {exc.strerror or exc}"
     if read is None:

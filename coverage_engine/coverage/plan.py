@@ -23,11 +23,13 @@ import math
 import os
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-
-import yaml
+from typing import TYPE_CHECKING
 
 from coverage_engine.coverage.errors import PlanError
 from coverage_engine.location import Location
+
+if TYPE_CHECKING:      # (read at run time only by a plan's parse: a batch's report needs no YAML)
+    import yaml
 
 #: Largest plan file read.
 MAX_PLAN_BYTES = 1024 * 1024
@@ -82,6 +84,8 @@ def _error(file: str, node: yaml.Node, message: str, text: str) -> PlanError:
 
 
 def _mapping(file: str, node: yaml.Node, what: str, allowed: tuple[str, ...], text: str) -> dict:
+    import yaml
+
     if not isinstance(node, yaml.MappingNode):
         raise _error(file, node, f"{what} must be a mapping", text)
     out: dict[str, tuple[yaml.Node, yaml.Node]] = {}
@@ -98,6 +102,8 @@ def _mapping(file: str, node: yaml.Node, what: str, allowed: tuple[str, ...], te
 
 
 def _scalar(file: str, node: yaml.Node, text: str) -> object:
+    import yaml
+
     if not isinstance(node, yaml.ScalarNode):
         raise _error(file, node, "must be a number", text)
     return yaml.safe_load(node.value) if not node.style else node.value   # plain: None (Python), "" (libyaml)
@@ -126,6 +132,8 @@ def _entry(file: str, node: yaml.Node, default: ItemPlan, text: str, what: str) 
 
 def parse_plan(text: str, file: str = "plan.yaml") -> CoveragePlan:
     """Parse and check a plan's text."""
+    import yaml
+
     from coverage_engine.yaml_bounds import YamlLimitError, compose_bounded
 
     try:

@@ -248,8 +248,10 @@ def main() -> int:
         def keep(key: tuple[str, str], measured: Measured) -> None:
             """The best run of each kind: the least own CPU for the CPU figure (its wall time is that run's),
             the shortest wall time else."""
-            figure = measured.cpu if key[1] in ("cpu", "reference") else measured.wall
-            if key not in best or figure < (best[key].cpu if key[1] in ("cpu", "reference") else best[key].wall):
+            def figure(run: Measured) -> float:
+                return run.cpu if key[1] in ("cpu", "reference") else run.wall
+
+            if key not in best or figure(measured) < figure(best[key]):
                 best[key] = measured
 
         for round_ in range(args.rounds):

@@ -35,7 +35,7 @@ class SpawnedRun(LoopRun):
         self._pidfd: int | None = None
 
     def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
-        pid = spawn_logged(argv, str(self.output_dir / LOG_FILE), append=False, extra_environment=environment).pid
+        pid = spawn_logged(argv, os.path.join(self.output_dir, LOG_FILE), append=False, extra_environment=environment).pid
         try:
             self._pidfd = os.pidfd_open(pid)
         except OSError:

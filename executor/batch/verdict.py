@@ -14,7 +14,6 @@ import errno
 import os
 import stat
 from dataclasses import dataclass
-from pathlib import Path
 
 from coverage_engine.results.document import Case
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
@@ -34,7 +33,7 @@ LOW_SPACE_BYTES = 64 * 1024
 
 
 
-def out_of_space(folder: Path) -> bool:
+def out_of_space(folder: str | os.PathLike[str]) -> bool:
     """Whether the file system holding ``folder`` has (next to) no room left for another file."""
     try:
         st = os.statvfs(folder)
@@ -203,7 +202,7 @@ def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: Fil
         status, reason = JobState.ERROR, f"exit code {rc} although its test.xml passed"
     else:
         status, reason = JobState.PASSED, None
-    if status is JobState.ERROR and (outcome.disk_full or out_of_space(Path(folder))):
+    if status is JobState.ERROR and (outcome.disk_full or out_of_space(folder)):
         status, reason = JobState.CANCELLED, DISK_FULL_REASON
     log = os.path.join(folder, LOG_FILE)
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,

@@ -15,8 +15,10 @@
     descriptor; the loop's inbox waits on both and on the job threads' events.
 ``job_run`` / ``job_folders``
     one attempt in a thread (jobs with ``--post-run`` hooks or an echoed output) and the job's own folder.
-``builtin_runner`` / ``fork_server`` / ``fork_protocol``
-    the built-in runner: jobs forked from a server that has imported the runtime once.
+``builtin_runner`` / ``fork_server`` / ``fork_protocol`` / ``fork_child`` / ``fork_dispatch``
+    the built-in runner: jobs forked from a server that has imported the runtime once, what a forked
+    child does to become the job, and the dispatcher that spreads the forks over several warm copies
+    of the server when a worker has many slots.
 ``verdict``
     judging an attempt: how the child ended and the ``test.xml`` it left become a job state and a reason.
 ``junit_merge`` / ``batch_outcome`` / ``failure_summary``

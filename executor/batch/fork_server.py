@@ -17,6 +17,9 @@ thousand pages: 4-5 ms), while the previous job still runs on the other core; th
 then starts on warm pages. Measured: a job's run 3.8 ms instead of 9.4 ms. With every core busy a spare
 only adds the probe's work, so the server keeps none.
 
+What the child does to become the job is :mod:`executor.batch.fork_child`. With many job slots the
+server forks the jobs from several warm copies of itself (:mod:`executor.batch.fork_dispatch`).
+
 Nothing of a scenario ever runs in the server: plugins, external methods and the scenario folder's
 modules are imported by the child that needs them, and die with it, so a job that crashes, leaks,
 changes global state or hangs cannot touch the next one.
@@ -45,8 +48,8 @@ import select
 import signal
 import socket
 import sys
-from typing import TextIO
 
+from executor.batch.fork_child import HELD_BACK, run_child
 from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, open_log, receive, send
 
 
@@ -131,124 +134,11 @@ def preload(command: Command, scratch: str) -> None:
     gc.freeze()            # objects made so far are never scanned again, so the children do not copy them
 
 
-def _fresh_stdio() -> None:
-    """``sys.stdin/stdout/stderr`` on fds 0-2 as a new interpreter makes them (buffering and all):
-    stdout block-buffered (line-buffered on a terminal), stderr line-buffered; with
-    ``PYTHONUNBUFFERED`` both write straight to the file descriptor, with no buffer in between, so
-    nothing written is lost when the job is killed."""
-    import io
-
-    unbuffered = bool(os.environ.get("PYTHONUNBUFFERED"))
-    old = {name: getattr(sys, name) for name in ("stdin", "stdout", "stderr")}
-
-    def stream(fd: int, like: TextIO) -> io.TextIOWrapper:
-        if fd == 0:
-            return io.TextIOWrapper(io.BufferedReader(io.FileIO(fd, "r", closefd=False)),
-                                    encoding=like.encoding, errors=like.errors)
-        raw = io.FileIO(fd, "w", closefd=False)
-        if unbuffered:
-            return io.TextIOWrapper(raw, encoding=like.encoding, errors=like.errors, write_through=True)
-        return io.TextIOWrapper(io.BufferedWriter(raw), encoding=like.encoding, errors=like.errors,
-                                line_buffering=fd == 2 or os.isatty(fd))
-
-    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
-        fresh = stream(fd, old[name])
-        setattr(sys, name, fresh)          # the job's own streams, also as sys.__stdin__ & co.
-        setattr(sys, f"__{name}__", fresh)
-
-
-def _exit_code(exc: SystemExit) -> int:
-    """What the interpreter would exit with for ``SystemExit`` (``None`` 0, a text printed and 1)."""
-    code = exc.code
-    if code is None:
-        return 0
-    if isinstance(code, int):
-        return code & 0xFF
-    print(code, file=sys.stderr)
-    return 1
-
-
-def _run_child(request: dict, output_fd: int, server: _Server) -> None:
-    """In the forked child: become the launched command, run it, never return.
-
-    The stop signals (``_HELD_BACK``) come blocked from the server (or the spare); they are let
-    through once the command is about to run. One that came meanwhile was meant for a job that had
-    not begun: the child ends by it at once, silently, as a process killed before it ran would.
-    """
-    code, interrupted = 1, False
-    try:
-        if os.getpgid(0) != os.getpid():     # a spare made its own session already
-            os.setsid()
-        server.close_in_child()
-        for sig in (signal.SIGTERM, signal.SIGCHLD, signal.SIGHUP, signal.SIGQUIT):
-            signal.signal(sig, signal.SIG_DFL)
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        signal.signal(signal.SIGPIPE, signal.SIG_IGN)         # as the interpreter sets it at start
-        signal.set_wakeup_fd(-1)
-        null = os.open(os.devnull, os.O_RDONLY)
-        os.dup2(null, 0)
-        os.dup2(output_fd, 1)
-        os.dup2(output_fd, 2)
-        for fd in (null, output_fd):
-            if fd > 2:
-                os.close(fd)
-        os.chdir(request["cwd"] or ".")
-        os.environ.update(request["env"])
-        _fresh_stdio()
-        try:
-            for sig in signal.sigpending() & _HELD_BACK:    # stopped before it began
-                signal.signal(sig, signal.SIG_DFL)
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_BACK)
-            server.command.run(list(request["argv"][1:]))
-            code = 0
-        except SystemExit as exc:
-            code = _exit_code(exc)
-        except BaseException:  # noqa: BLE001 - what the interpreter would print for an uncaught error
-            interrupted = isinstance(sys.exc_info()[1], KeyboardInterrupt)
-            sys.excepthook(*sys.exc_info())
-            code = 1
-        code = _finalize(code)
-    finally:
-        if interrupted:                    # as the interpreter ends on an uncaught Ctrl-C: by SIGINT
-            signal.signal(signal.SIGINT, signal.SIG_DFL)
-            os.kill(os.getpid(), signal.SIGINT)
-        os._exit(code)
-
-
-def _finalize(code: int) -> int:
-    """The end of an interpreter's life, in its order: wait for the threads that are not daemons,
-    run the ``atexit`` functions, flush the standard streams. Returns the exit status, 120 when
-    stdout cannot be flushed (as the interpreter's own end reports it)."""
-    import atexit
-    import threading
-
-    try:
-        threading._shutdown()              # type: ignore[attr-defined]  # the interpreter's own join
-    except BaseException:  # noqa: BLE001 - as the interpreter does: say it, and go on ending
-        sys.excepthook(*sys.exc_info())
-    atexit._run_exitfuncs()
-    try:
-        sys.stdout.flush()
-    except Exception:  # noqa: BLE001 - the output is gone (a full disk): the status says so
-        code = 120
-    try:
-        sys.stderr.flush()
-    except Exception:  # noqa: BLE001, S110 - as the interpreter, a failing stderr is not reported
-        pass
-    return code
-
-
 class _Spare:
     """A forked child waiting for a job: its pid and the socket the job comes through."""
 
     def __init__(self, pid: int, sock: socket.socket) -> None:
         self.pid, self.sock = pid, sock
-
-
-#: Signals the server and its children hold back (blocked, so kept pending, never lost) until a job's
-#: command runs: a cancel or timeout sent to a job right after its fork, or to a spare's job while
-#: the spare warms up, reaches it (the probe must neither swallow nor die of them).
-_HELD_BACK = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT}
 
 
 def _run_spare(sock: socket.socket, server: _Server) -> None:
@@ -260,8 +150,8 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
         os.setsid()                       # its own group from the start: the job's, and killable as one
         server.close_in_child()
         signal.set_wakeup_fd(-1)
-        signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_BACK)
-        for sig in (*_HELD_BACK, signal.SIGCHLD):
+        signal.pthread_sigmask(signal.SIG_BLOCK, HELD_BACK)
+        for sig in (*HELD_BACK, signal.SIGCHLD):
             signal.signal(sig, signal.SIG_DFL)   # held back, not ignored: an ignored signal is lost
         folder = None
         try:
@@ -278,15 +168,31 @@ def _run_spare(sock: socket.socket, server: _Server) -> None:
     sock.close()
     if request is None or len(fds) != 1:
         os._exit(0)                       # the server ended (or sent no output): nothing to run
-    _run_child(request, fds[0], server)
+    run_child(request, fds[0], server.close_in_child, server.command.run)
+
+
+def _kill_group_and_leader(pid: int) -> None:
+    """SIGKILL to the group of ``pid`` and to ``pid`` itself (whether or not it leads a group yet)."""
+    for kill in (os.killpg, os.kill):
+        try:
+            kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
 
 
 class _Server:
-    """The serving loop: requests from the runner, children reaped, all single-threaded."""
+    """The serving loop: requests from the runner, children reaped, all single-threaded.
 
-    def __init__(self, sock: socket.socket, target: str, scratch: str, keep_spare: bool = False,
-                 limit: int = 0) -> None:
+    ``sock`` is the runner's socket, where the replies go. A forker of several
+    (:mod:`executor.batch.fork_dispatch`) reads its requests from ``requests`` instead, the dispatcher's
+    socket, and tells it there of every request it is done with (``{"free": 1}``: the job ended, or it
+    could not start), so the dispatcher knows which forker has a slot free.
+    """
+
+    def __init__(self, sock: socket.socket, command: Command, scratch: str, keep_spare: bool = False,
+                 limit: int = 0, requests: socket.socket | None = None) -> None:
         self.sock = sock
+        self.requests = requests or sock               # where the requests come from
         self.keep_spare = keep_spare
         self.limit = limit                             # jobs at once (0: no limit)
         self.waiting: dict[str, tuple[dict, int | None]] = {}  # request id -> (request, output fd), in
@@ -297,7 +203,7 @@ class _Server:
         self.wake_read, self.wake_write = os.pipe()
         os.set_blocking(self.wake_write, False)
         os.set_blocking(self.wake_read, False)
-        self.command = Command(target)
+        self.command = command
 
     def serve(self) -> None:
         signal.signal(signal.SIGCHLD, lambda *_: None)
@@ -306,10 +212,10 @@ class _Server:
             self._new_spare()
         try:
             while True:
-                ready, _, _ = select.select([self.sock.fileno(), self.wake_read], [], [])
+                ready, _, _ = select.select([self.requests.fileno(), self.wake_read], [], [])
                 # the runner's messages before the reaping: a request withdrawn before a job was
                 # stopped must be gone before that job's end starts the next waiting one
-                if self.sock.fileno() in ready and not self._read_messages():
+                if self.requests.fileno() in ready and not self._read_messages():
                     return
                 if self.wake_read in ready:
                     try:
@@ -324,35 +230,35 @@ class _Server:
     def _read_messages(self) -> bool:
         """Handle every message the runner has sent so far; False when it closed its end."""
         while True:
-            message, fds = receive(self.sock, max_fds=1)
+            message, fds = receive(self.requests, max_fds=1)
             if message is None:
                 return False
             if "withdraw" in message:
                 self._withdraw(str(message["withdraw"]))
             else:
                 self._request(message, fds)
-            if not select.select([self.sock.fileno()], [], [], 0)[0]:
+            if not select.select([self.requests.fileno()], [], [], 0)[0]:
                 return True
 
+    def _done_with(self) -> None:
+        """A request ended (its job exited, or it could not start): a forker of several says so to its dispatcher."""
+        if self.requests is not self.sock:
+            send(self.requests, {"free": 1})
+
     def _end_children(self) -> None:
-        """The runner is gone: so are its jobs, and the spare (which may not have its own group yet)."""
+        """The runner is gone: so are its jobs, and the spare. Each is killed as a group and as a
+        process: one forked a moment ago may not have its own group yet (found by a test that ended the
+        server right after two starts: the group did not exist, and the job ran on)."""
         for _request, fd in self.waiting.values():
             if fd is not None:
                 os.close(fd)
         self.waiting.clear()
         spare = self.spare
         for pid in self.children:
-            try:
-                os.killpg(pid, signal.SIGKILL)
-            except OSError:
-                pass
+            _kill_group_and_leader(pid)
         if spare is not None:
             spare.sock.close()                   # a spare still warming up finds no job and ends
-            for kill in (os.killpg, os.kill):
-                try:
-                    kill(spare.pid, signal.SIGKILL)
-                except OSError:
-                    pass
+            _kill_group_and_leader(spare.pid)
             try:
                 os.waitpid(spare.pid, 0)
             except ChildProcessError:
@@ -364,6 +270,7 @@ class _Server:
             for fd in fds:
                 os.close(fd)
             send(self.sock, {"id": request.get("id"), "event": "failed", "reason": "no output descriptor"})
+            self._done_with()
             return
         self.waiting[str(request.get("id"))] = (request, fds[0] if fds else None)
         self._start_waiting()
@@ -381,6 +288,7 @@ class _Server:
                     send(self.sock, {"id": request_id, "event": "failed", "errno": exc.errno, "folder": refused,
                                      "reason": f"cannot prepare the job: {exc.strerror}" if refused else
                                      f"cannot open its log {request['log']}: {exc.strerror or exc}"})
+                    self._done_with()
                     continue
             self._spawn(request, fd)
 
@@ -399,9 +307,10 @@ class _Server:
             except OSError as exc:
                 os.close(output_fd)
                 send(self.sock, {"id": request["id"], "event": "failed", "reason": f"fork: {exc.strerror}"})
+                self._done_with()
                 return
             if pid == 0:
-                _run_child(request, output_fd, self)
+                run_child(request, output_fd, self.close_in_child, self.command.run)
         os.close(output_fd)
         self.children[pid] = request["id"]
         send(self.sock, {"id": request["id"], "event": "started", "pid": pid})
@@ -442,6 +351,7 @@ class _Server:
         if self.sock.fileno() < 0:
             return                              # a spare closed them when it was forked
         self.sock.close()
+        self.requests.close()
         os.close(self.wake_read)
         os.close(self.wake_write)
         if self.spare is not None:
@@ -467,22 +377,36 @@ class _Server:
             if job is not None:
                 self._start_waiting()          # the slot's next job first, then the news
                 send(self.sock, {"id": job, "event": "exited", "pid": pid, "status": status})
+                self._done_with()
 
 
-def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: int = 0) -> None:
+def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: int = 0,
+          forkers: int = 1) -> None:
     """Entry of the server process: ``fd`` is its end of the socket pair; ``target`` the command's
     ``module:function`` (:func:`~executor.batch.fork_protocol.command_target`); ``scratch`` a private folder of the runner's for the
     probe runs (the runner removes it, or its watchdog after a ``kill -9``); ``keep_spare``: keep a warm
-    spare child (the runner has a core to spare); ``limit``: jobs at once, more requests wait."""
+    spare child (the runner has a core to spare); ``limit``: jobs at once, more requests wait;
+    ``forkers``: processes that fork the jobs (more than one: :mod:`executor.batch.fork_dispatch`)."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)          # the runner decides; its children are in their own groups
-    signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_BACK)   # and inherit them blocked (see _run_child)
+    signal.pthread_sigmask(signal.SIG_BLOCK, HELD_BACK)   # and inherit them blocked (see fork_child.run_child)
     sock = socket.socket(fileno=fd)
     try:
-        server = _Server(sock, target, scratch, keep_spare, limit)
-        preload(server.command, scratch)
+        command = Command(target)
+        preload(command, scratch)
+        if forkers > 1:
+            from executor.batch.fork_dispatch import Dispatcher
+
+            dispatcher = Dispatcher(sock, limit)
+            dispatcher.start_forkers(forkers, lambda requests: _Server(sock, command, scratch, keep_spare,
+                                                                       requests=requests).serve())
+        else:
+            server = _Server(sock, command, scratch, keep_spare, limit)
     except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
         send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
         raise SystemExit(1) from None
     send(sock, {"event": "ready", "pid": os.getpid()})
-    server.serve()
+    if forkers > 1:
+        dispatcher.serve()
+    else:
+        server.serve()

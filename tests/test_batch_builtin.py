@@ -1,9 +1,6 @@
 """The built-in runner (no launch command; issue 14) through the real CLI, and no orphans after kill -9.
 
-The scenarios are variants made by the real ``scenario_variation`` of a file whose external method
-(``probe_mod.record``) lives in the scenario's folder: it records, per call, the job's name, the
-process it ran in, its parent, how often the module was called in that process, and whether a
-global that an earlier job changed is still changed — so the tests see where user code ran and
+The scenarios are the probe variants of :mod:`probe_variants`: the tests see where user code ran and
 whether one job's state reached the next.
 """
 
@@ -22,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
+from probe_variants import make_variants, records
 from tests_schema import assert_valid
 
 from executor.batch.hand_over import CLAIM_CHUNK
@@ -29,63 +27,6 @@ from executor.batch.hand_over import CLAIM_CHUNK
 pytest_plugins = ["batch_stores"]            # the pg_url fixture
 
 BIN = Path(sys.executable).parent
-
-PROBE_MODULE = '''
-import os, signal, sys, time
-CALLS = []
-IMPORTED_IN = os.getpid()
-
-def record(name, pause):
-    CALLS.append(name)
-    time.sleep(pause)
-    import coverage_engine.results.run_report as junit
-    leaked = getattr(junit, "LEAKED_BY", "-")
-    junit.LEAKED_BY = name                      # global state a later job must never see
-    line = "%s %d %d %d %d %s\\n" % (name, os.getpid(), os.getppid(), IMPORTED_IN, len(CALLS), leaked)
-    fd = os.open(os.environ["BATCH_LEDGER"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-    os.write(fd, line.encode())
-    os.close(fd)
-    if name == "crash":
-        os.kill(os.getpid(), signal.SIGSEGV)
-    if name == "hang":
-        time.sleep(60)
-    return name
-'''
-
-
-def scenario(names: list[str], pause: float) -> str:
-    listed = ", ".join(f'"{n}"' for n in names)
-    return f"""import osc.helpers
-
-struct probe:
-    def record(name: string, pause: float) -> string is external probe_mod.record()
-
-scenario job:
-    name: string = "x"
-    keep(name in [{listed}])
-    cover(name)
-    do serial:
-        log(probe.record(name, {pause}))
-        check: compare(left_value: name, operator: "!=", right_value: "fail")
-"""
-
-
-def make_variants(root: Path, names: list[str], pause: float = 0.0) -> dict[str, str]:
-    """Variants ``job0…`` of the probe scenario in ``root/out``; returns the cli environment."""
-    (root / "src").mkdir(parents=True)
-    (root / "src" / "probe_mod.py").write_text(PROBE_MODULE)
-    (root / "src" / "job.osc").write_text(scenario(names, pause))
-    env = cli_env(root)
-    made = subprocess.run([str(BIN / "scenario_variation"), "src/job.osc", "-o", "out"], cwd=root, env=env,
-                          capture_output=True, text=True)
-    assert made.returncode == 0, made.stdout + made.stderr
-    return env
-
-
-def records(root: Path) -> list[list[str]]:
-    path = root / "ledger.txt"
-    return [line.split() for line in path.read_text().splitlines()] if path.exists() else []
-
 
 def _normal(xml_text: str) -> bytes:
     """A report without what may differ between two runs: times, host, output folder."""

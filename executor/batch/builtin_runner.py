@@ -33,7 +33,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
 from executor.batch.fork_protocol import command_target, receive, send
-from executor.children.process import StartTicket
+from executor.children.process import StartTicket, kill_orphan
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
 BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}")
@@ -58,6 +58,19 @@ def usable_cpus() -> int:
 def spare_cores(slots: int) -> bool:
     """Whether this machine has a core left over when ``slots`` jobs run (for a warm spare child)."""
     return slots < usable_cpus()
+
+
+#: Job slots one forking process is given (see :mod:`executor.batch.fork_dispatch`): measured on 2 cores,
+#: the fork server's own CPU per trivial job is about a fifth of the job's, so one forker keeps about
+#: five slots busy; four leaves it room.
+SLOTS_PER_FORKER = 4
+
+
+def forkers_for(slots: int) -> int:
+    """How many processes fork the jobs of ``slots`` at once: one per :data:`SLOTS_PER_FORKER` slots, and
+    no more than one per that many usable cores (each forker is one more warm interpreter, and on few
+    cores the jobs themselves are the bottleneck, not their forks)."""
+    return max(1, min(-(-slots // SLOTS_PER_FORKER), usable_cpus() // SLOTS_PER_FORKER))
 
 
 class ForkServerError(OSError):
@@ -121,10 +134,11 @@ class ForkServer:
     """
 
     def __init__(self, environment: Mapping[str, str] | None = None, *, keep_spare: bool = False,
-                 on_scratch: Callable[[str], None] | None = None, limit: int = 0) -> None:
+                 on_scratch: Callable[[str], None] | None = None, limit: int = 0, forkers: int = 1) -> None:
         self.environment = dict(os.environ if environment is None else environment)
         self.keep_spare = keep_spare
         self.limit = limit
+        self.forkers = forkers                     # processes that fork the jobs (see fork_dispatch)
         self.on_scratch = on_scratch
         self.scratch: str | None = None
         self.proc: subprocess.Popen | None = None
@@ -149,7 +163,8 @@ class ForkServer:
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         script_dir = os.path.dirname(sys.executable)
         code = ("import sys; sys.path[0] = sys.argv[1]; from executor.batch.fork_server import serve; "
-                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5] == 'spare', int(sys.argv[6]))")
+                "serve(int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5] == 'spare', int(sys.argv[6]), "
+                "int(sys.argv[7]))")
         try:
             target = command_target()
             self.scratch = tempfile.mkdtemp(prefix="scenario_fork_server_")
@@ -162,7 +177,7 @@ class ForkServer:
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, script_dir, str(theirs.fileno()), target,
                                           self.scratch, "spare" if self.keep_spare else "no-spare",
-                                          str(self.limit)],
+                                          str(self.limit), str(self.forkers)],
                                          pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, env=self.environment,
                                          start_new_session=True, close_fds=True)
@@ -367,10 +382,7 @@ class ForkServer:
             item.reason = "the fork server ended"
             item.event.set()
         for process in running:            # their parent is gone: nobody else can wait for them
-            try:
-                os.killpg(process.pid, signal.SIGKILL)
-            except OSError:
-                pass
+            kill_orphan(process.pid)
             process._exited(-signal.SIGKILL)
 
     def _dispatch(self, message: dict) -> None:

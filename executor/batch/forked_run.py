@@ -18,7 +18,7 @@ from coverage_engine.results.files import LOG_FILE
 from executor.batch.builtin_runner import ForkServer, start_failure
 from executor.batch.job_run import Done, StartOrder, failed_attempt, not_started
 from executor.batch.loop_run import Events, LoopRun
-from executor.children.process import kill_group
+from executor.children.process import kill_orphan
 from store.jobs import Batch, Job
 
 
@@ -67,7 +67,7 @@ class ForkedRun(LoopRun):
             return [self._failed(message)]
         if self.pid is None:                       # "gone" before the start
             return [self._failed({"reason": "the fork server ended"})]
-        kill_group(self.pid)                       # its parent is gone: nobody else can wait for it
+        kill_orphan(self.pid)                      # its parent is gone: nobody else can wait for it
         return self._on_exited(-signal.SIGKILL)
 
     def _failed(self, message: dict) -> Done:

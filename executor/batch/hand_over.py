@@ -1,6 +1,7 @@
 """Hand-over to the built-in runner's fork server, and how many jobs a worker holds at once.
 
 :class:`HandOver` starts the worker's fork server on the first built-in job (again should it end),
+with as many forking processes as its slots call for (:func:`~executor.batch.builtin_runner.forkers_for`),
 numbers the jobs so that they reach it in claim order (:class:`~executor.batch.job_run.StartOrder`),
 and says how many jobs the worker holds: its slots, and in a single-host batch of the built-in
 runner as many again, handed to the fork server ahead. The server keeps each until a slot is free
@@ -26,7 +27,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 
-from executor.batch.builtin_runner import ForkServer, spare_cores
+from executor.batch.builtin_runner import ForkServer, forkers_for, spare_cores
 from executor.batch.job_run import StartOrder
 from executor.children.process import RUNNER_ENV
 from store.jobs import Batch
@@ -39,9 +40,10 @@ class HandOver:
     """The fork server of one worker (``runner_id``: its mark for the watchdog) and its start order."""
 
     def __init__(self, runner_id: str, slots: int, *, ahead_allowed: bool,
-                 on_scratch: Callable[[str], None] | None = None) -> None:
+                 on_scratch: Callable[[str], None] | None = None, forkers: int | None = None) -> None:
         self.runner_id = runner_id
         self.slots = slots
+        self.forkers = forkers_for(slots) if forkers is None else forkers   # processes forking the jobs
         self.ahead_allowed = ahead_allowed         # the single-host run may hand jobs over ahead
         self.on_scratch = on_scratch               # the watchdog removes the server's scratch folder
         self.order = StartOrder()
@@ -56,7 +58,7 @@ class HandOver:
             self.close()
             self._server = ForkServer({**os.environ, RUNNER_ENV: self.runner_id},
                                       keep_spare=spare_cores(self.slots), limit=self.slots,
-                                      on_scratch=self.on_scratch).start()
+                                      forkers=self.forkers, on_scratch=self.on_scratch).start()
         return self._server
 
     @property

@@ -74,6 +74,7 @@ class WorkerSettings:
     cwd: str | None = None
     watchdog: bool = True                # every process this worker starts dies with it, even after kill -9
     hand_over_ahead: bool = False        # the single-host run: built-in jobs go to the fork server ahead
+    forkers: int | None = None           # processes forking built-in jobs (None: as the slots and cores call for)
 
 
 class Worker:
@@ -91,7 +92,7 @@ class Worker:
         self.leases = LeaseKeeper(store, self.identity, lease=settings.lease, max_lost=settings.max_lost,
                                   batch_id=settings.batch_id)
         self.hand_over = HandOver(self.identity.id, settings.slots, ahead_allowed=settings.hand_over_ahead
-                                  and settings.batch_id is not None)
+                                  and settings.batch_id is not None, forkers=settings.forkers)
         self.recorder = ResultRecorder(store, reporter, self.backoff, RecorderHooks(
             stop=self.stop, requeued=self.pacer.wake, halted=lambda _batch: self.pacer.idle(),
             stopping=self._stop_is_set), self.summary,

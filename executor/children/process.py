@@ -115,6 +115,16 @@ def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
         return False
 
 
+def kill_orphan(pid: int) -> None:
+    """SIGKILL to a job whose parent (the fork server) is gone: to its group and to the process itself,
+    which may not lead a group yet when it was forked a moment before."""
+    kill_group(pid)
+    try:
+        os.kill(pid, signal.SIGKILL)
+    except OSError:
+        pass
+
+
 def process_alive(pid: int | None) -> bool:
     """Whether a process with this id exists on this host and is not a zombie."""
     if not pid:

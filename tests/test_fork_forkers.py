@@ -1,0 +1,223 @@
+"""Several forking processes (issue 34): with many slots the fork server forks from warm copies of itself.
+
+Checked here on the real fork server with two forkers (this machine's cores would give one): the
+slots are shared (never more jobs at once than the limit), waiting requests start in the order
+they came, a withdrawn one is answered by the dispatcher, jobs come from both forkers, and nothing
+is left when the runner closes, or when a forker dies. Then a whole batch through the real CLI on a
+"16-core machine" (its core count patched in the runner's process), and ``kill -9`` of that runner.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from batch_fixtures import alive, marked
+from probe_variants import make_variants, records
+from tests_schema import assert_valid
+
+from executor.batch.builtin_runner import SLOTS_PER_FORKER, ForkServer, forkers_for
+from executor.children.process import kill_orphan
+
+BIN = Path(sys.executable).parent
+
+QUICK = "import osc.helpers\n\nscenario quick:\n    do serial:\n        log('hi')\n        emit end\n"
+SLOW = "import osc.helpers\n\nscenario slow:\n    do serial:\n        wait elapsed({seconds}s)\n        emit end\n"
+
+
+def parent_of(pid: int) -> int:
+    with open(f"/proc/{pid}/stat") as handle:
+        return int(handle.read().rsplit(")", 1)[1].split()[1])
+
+
+def children_of(pid: int) -> list[int]:
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as handle:
+            return [int(child) for child in handle.read().split()]
+    except OSError:
+        return []
+
+
+class Jobs:
+    """Requests submitted to a server, and every reply in the order it came."""
+
+    def __init__(self, server: ForkServer, folder: Path) -> None:
+        self.server, self.folder = server, folder
+        self.replies: list[tuple[int, str, int | None]] = []    # (job, event, pid)
+        self.parents: dict[int, int] = {}                       # job -> the process that forked it
+        self.requests: dict[int, str] = {}
+
+    def submit(self, job: int, scenario: str) -> None:
+        out = self.folder / "out" / f"j{job}"
+        root = str(self.folder / "out")
+        self.requests[job] = self.server.submit(
+            ["scenario_execution", scenario, "--output-dir", str(out)], cwd=str(self.folder), environment={},
+            log_path=str(out / "log.txt"), append=False, log_folder=(root, os.path.realpath(root)),
+            reply=lambda message: self._heard(job, message))
+
+    def _heard(self, job: int, message: dict) -> None:
+        self.replies.append((job, str(message.get("event")), message.get("pid")))
+        if message.get("event") == "started":
+            self.parents[job] = parent_of(int(message["pid"]))
+
+    def events(self, kind: str) -> list[int]:
+        return [job for job, event, _pid in self.replies if event == kind]
+
+    def wait_for(self, done: int, seconds: float = 60) -> None:
+        """Read replies until ``done`` requests have had their last word (or the server ended)."""
+        deadline = time.monotonic() + seconds
+        while len([r for r in self.replies if r[1] in ("exited", "withdrawn", "failed", "gone")]) < done:
+            assert time.monotonic() < deadline, self.replies
+            select.select([self.server.fileno()], [], [], 0.2)
+            if not self.server.poll():
+                return
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("TMPDIR", str(tmp_path / "tmp"))     # the server's scratch folder goes here
+    (tmp_path / "tmp").mkdir()
+    (tmp_path / "out").mkdir()
+    (tmp_path / "quick.osc").write_text(QUICK)
+    (tmp_path / "slow.osc").write_text(SLOW.format(seconds=1.5))
+    (tmp_path / "hang.osc").write_text(SLOW.format(seconds=60))
+    return tmp_path
+
+
+def test_forkers_follow_the_slots_and_the_cores(monkeypatch):
+    import executor.batch.builtin_runner as runner
+
+    monkeypatch.setattr(runner, "usable_cpus", lambda: 16)
+    assert [forkers_for(n) for n in (1, SLOTS_PER_FORKER, SLOTS_PER_FORKER + 1, 16, 64)] == [1, 1, 2, 4, 4]
+    monkeypatch.setattr(runner, "usable_cpus", lambda: 2)
+    assert [forkers_for(n) for n in (1, 8, 64)] == [1, 1, 1]       # few cores: the jobs are the bottleneck
+
+
+def test_two_forkers_share_the_slots_and_a_waiting_job_waits_for_one(folder):
+    server = ForkServer(limit=3, forkers=2).start()
+    jobs = Jobs(server, folder)
+    try:
+        for job in range(5):
+            jobs.submit(job, str(folder / ("slow.osc" if job < 4 else "quick.osc")))
+        jobs.submit(5, str(folder / "quick.osc"))
+        server.withdraw(jobs.requests[5])                       # still waiting: the dispatcher answers
+        forkers = set(children_of(server.proc.pid))
+        jobs.wait_for(6)
+    finally:
+        server.close()
+    assert jobs.events("withdrawn") == [5]
+    started = jobs.events("started")
+    first_end = next(i for i, reply in enumerate(jobs.replies) if reply[1] == "exited")
+    # the first three came first and started at once; the others waited for a slot (two forkers may
+    # answer in either order: the replies of two processes cross)
+    assert set(started[:3]) == {0, 1, 2} and sorted(started[3:]) == [3, 4]
+    assert all(jobs.replies.index((job, "started", pid)) > first_end
+               for job, event, pid in jobs.replies if event == "started" and job in (3, 4))
+    assert sorted(jobs.events("exited")) == [0, 1, 2, 3, 4]
+    running = most = 0
+    for _job, event, _pid in jobs.replies:
+        running += {"started": 1, "exited": -1}.get(event, 0)
+        most = max(most, running)
+    assert most == 3                                            # the limit holds over both forkers
+    assert set(jobs.parents.values()) == forkers and len(forkers) == 2   # each forked some, the server none
+    assert all(not alive(pid) for pid in forkers)
+    assert all((folder / "out" / f"j{job}" / "test.xml").is_file() for job in range(5))
+    assert list((folder / "tmp").iterdir()) == []               # the scratch folder went with the server
+
+
+def test_a_job_waited_for_in_a_thread_gets_its_output_descriptor_through_the_dispatcher(folder):
+    server = ForkServer(limit=2, forkers=2).start()
+    try:
+        processes = []
+        for job in range(3):                 # (a job with --post-run hooks waits for its child in a thread)
+            with open(folder / f"output{job}.txt", "wb") as output:
+                processes.append(server.spawn(["scenario_execution", str(folder / "quick.osc"), "--output-dir",
+                                               str(folder / "out" / f"t{job}")], cwd=str(folder), environment={},
+                                              output_fd=output.fileno()))
+        assert [process.wait(60) for process in processes] == [0, 0, 0]
+    finally:
+        server.close()
+    assert all("Scenario 'quick' succeeded" in (folder / f"output{job}.txt").read_text() for job in range(3))
+
+
+def test_a_forker_that_dies_ends_the_server_and_its_jobs(folder):
+    server = ForkServer(limit=2, forkers=2).start()
+    jobs = Jobs(server, folder)
+    try:
+        jobs.submit(0, str(folder / "hang.osc"))
+        jobs.submit(1, str(folder / "hang.osc"))
+        deadline = time.monotonic() + 60
+        while len(jobs.events("started")) < 2:
+            assert time.monotonic() < deadline, jobs.replies
+            select.select([server.fileno()], [], [], 0.2)
+            server.poll()
+        started = {job: pid for job, event, pid in jobs.replies if event == "started"}
+        assert jobs.parents[0] != jobs.parents[1]               # one job on each forker
+        os.kill(jobs.parents[0], signal.SIGKILL)
+        jobs.wait_for(2, seconds=30)
+        assert sorted(jobs.events("gone")) == [0, 1]            # the runner hears its server is gone
+        assert not server.alive
+    finally:
+        server.close()
+    deadline = time.monotonic() + 10
+    while alive(started[1]):                                    # the other forker killed its job as it ended
+        assert time.monotonic() < deadline, "the job of the forker still alive outlived the server"
+        time.sleep(0.05)
+    assert not alive(jobs.parents[1])
+    kill_orphan(started[0])                  # the dead forker's job: the runner kills it on "gone" (ForkedRun)
+
+
+#: The batch CLI in a process that believes it has 16 cores (so -j 8 forks from two forkers).
+MANY_CORES = ("import sys; import executor.batch.builtin_runner as runner; runner.usable_cpus = lambda: 16; "
+              "from cli.scenario_batch_execution import main; sys.argv[0] = 'scenario_batch_execution'; main()")
+
+
+def test_a_batch_on_many_cores_forks_its_jobs_from_several_forkers(tmp_path):
+    names = [f"m{i}" for i in range(24)]
+    env = make_variants(tmp_path, names, pause=0.2)
+    done = subprocess.run([sys.executable, "-c", MANY_CORES, "-i", "out", "-o", "res", "-j", "8"], cwd=tmp_path,
+                          env=env, capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "24 passed" in done.stdout
+    report = tmp_path / "res" / "test.xml"
+    assert_valid(report)
+    assert [s.get("name") for s in ET.parse(report).iter("testsuite")] == [f"job{i}" for i in range(24)]
+    ledger = records(tmp_path)
+    assert sorted(row[0] for row in ledger) == sorted(names)           # each job ran once
+    parents = {row[2] for row in ledger}
+    assert len(parents) == 2 and all(not alive(int(pid)) for pid in parents)   # two forkers, gone at the end
+
+
+def test_kill_9_of_a_runner_with_several_forkers_leaves_no_process(tmp_path):
+    names = [f"k{i}" for i in range(40)]
+    env = make_variants(tmp_path, names, pause=0.3)
+    runner = subprocess.Popen([sys.executable, "-c", MANY_CORES, "-i", "out", "-o", "res", "-j", "8"], cwd=tmp_path,
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while len(records(tmp_path)) < 8:
+            assert time.monotonic() < deadline and runner.poll() is None, "the batch runs its jobs"
+            time.sleep(0.02)
+        with sqlite3.connect(tmp_path / ".scenario_store.db") as conn:
+            (worker,) = conn.execute("SELECT worker_id FROM jobs WHERE worker_id IS NOT NULL LIMIT 1").fetchone()
+        mark = f"SCENARIO_BATCH_RUNNER={worker}"
+        forkers = [pid for server in children_of(runner.pid) for pid in children_of(server)]
+        assert len([pid for pid in forkers if pid in marked(mark)]) >= 2      # the forkers (and their jobs)
+        runner.send_signal(signal.SIGKILL)
+        runner.communicate(timeout=10)
+        killed_at = time.monotonic()
+        while marked(mark):
+            assert time.monotonic() - killed_at < 5, f"alive 5 s after kill -9: {marked(mark)}"
+            time.sleep(0.05)
+    finally:
+        if runner.poll() is None:
+            runner.kill()
+            runner.communicate(timeout=10)

@@ -1,6 +1,6 @@
 """Is the batch process the bottleneck? Its own CPU per job, launched mode against xargs, jobs/s per -j (issue 34).
 
-Three figures, each for this tree and (with ``--baseline DIR``) for an older source tree run by the
+Four figures, each for this tree and (with ``--baseline DIR``) for an older source tree run by the
 same interpreter, side by side in one run:
 
 1. **The batch process's own CPU per job**: ``scenario_batch_execution -j 2`` with the built-in runner
@@ -11,6 +11,13 @@ same interpreter, side by side in one run:
    (``waitid(..., WEXITED | WNOWAIT)``), so nothing of its last moments is missed and nothing of its
    children (which ``wait4``'s rusage would add) is counted. Start-up and the merged report are in
    it (divided over the jobs). Goal: <= 0.5 ms per job.
+
+   In the same run, the **forking processes' own CPU per job** (:class:`ServerWatch`): the fork
+   server's, or with several forkers each forker's and the dispatcher's, from the moment each was
+   ready. Each is one process whatever ``-j``, as the batch process is, so the busiest of them all
+   caps the jobs/s a worker reaches on many cores ("one-core cap"). ``--cpu-slots 8 --pretend-cores
+   16`` runs this figure as a 16-core machine would (two forkers at -j 8), to see the split on a
+   smaller one.
 2. **Launched mode against xargs**: ``--launched`` jobs whose command is a shell writing a one-testcase
    ``test.xml``, ``-j 2``, against ``xargs -P 2`` running one shell per job that does the same work our
    runner asks for (make the job's folder, send its output to ``log.txt``, write ``test.xml``). Goal:
@@ -52,6 +59,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -79,10 +87,83 @@ class Tree:
 
 @dataclass(frozen=True)
 class Measured:
-    """One run: wall seconds and the own CPU seconds of the measured process (children excluded)."""
+    """One run: wall seconds and the own CPU seconds of the measured process (children excluded), and
+    the own CPU seconds of each fork server it started (see :class:`ServerWatch`)."""
 
     wall: float
     cpu: float
+    #: Each fork server's own CPU seconds once it served (from its first child on: its start and preload left out).
+    servers: tuple[float, ...] = ()
+
+
+#: How often :class:`ServerWatch` reads the fork servers' CPU (what a server spends in its last interval is missed).
+WATCH_EVERY = 0.02
+
+
+class ServerWatch(threading.Thread):
+    """The own CPU (utime + stime, children excluded) of every process that forks a batch's jobs, read
+    from ``/proc`` every :data:`WATCH_EVERY` seconds while they live (the last reading of each is kept).
+
+    Those are the fork server (a child of the batch process whose command line runs
+    ``executor.batch.fork_server``) and, with several forkers (:mod:`executor.batch.fork_dispatch`),
+    the server's children that have children of their own (a trivial job has none). Forking is the
+    batch's other work for every job (a ``fork`` of a warm interpreter, and the copies of the pages the
+    forking process writes afterwards), done by processes of its own: with many cores, the busiest of
+    them and the batch process bound the jobs/s. A process's start (imports, the probe runs of the
+    preload) is left out: its CPU is counted from the first reading that finds a child of its own (it
+    forks none before it is ready)."""
+
+    def __init__(self, pid: int) -> None:
+        super().__init__(daemon=True)
+        self.pid = pid
+        self.done = threading.Event()
+        self.cpu: dict[int, float] = {}
+        self.ready: dict[int, float] = {}          # a forking process's CPU when it was first seen with a child
+        self._servers: set[int] = set()
+        self._others: set[int] = set()
+
+    def run(self) -> None:
+        while not self.done.wait(WATCH_EVERY):
+            children = _children(self.pid)
+            if children is None:
+                return
+            for child in children:
+                if child not in self._servers and child not in self._others:
+                    self._classify(child)
+            watched = set(self._servers)
+            for server in self._servers:
+                watched.update(_children(server) or ())
+            for pid in watched:
+                try:
+                    with open(f"/proc/{pid}/stat", "rb") as handle:
+                        fields = handle.read().rsplit(b")", 1)[1].split()
+                except OSError:
+                    continue
+                self.cpu[pid] = (int(fields[11]) + int(fields[12])) / CLOCK_TICKS
+                if pid not in self.ready and _children(pid):
+                    self.ready[pid] = self.cpu[pid]
+
+    def _classify(self, pid: int) -> None:
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as handle:
+                server = b"executor.batch.fork_server" in handle.read()
+        except OSError:
+            return
+        (self._servers if server else self._others).add(pid)
+
+    def finish(self) -> tuple[float, ...]:
+        self.done.set()
+        self.join()
+        return tuple(self.cpu[pid] - self.ready[pid] for pid in sorted(self.ready))
+
+
+def _children(pid: int) -> list[int] | None:
+    """The children of ``pid`` (None when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as handle:
+            return [int(child) for child in handle.read().split()]
+    except OSError:
+        return None
 
 
 def own_cpu_at_exit(proc: subprocess.Popen) -> float:
@@ -143,12 +224,15 @@ def run(argv: Sequence[str], cwd: Path, env: dict[str, str]) -> Measured:
     start = time.perf_counter()
     with tempfile.TemporaryFile() as errors:
         proc = subprocess.Popen(list(argv), cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=errors)
+        watch = ServerWatch(proc.pid)
+        watch.start()
         cpu = own_cpu_at_exit(proc)
         wall = time.perf_counter() - start
+        servers = watch.finish()
         if proc.returncode != 0:
             errors.seek(0)
             raise SystemExit(f"{argv[0]} failed ({proc.returncode}): {errors.read()[-2000:].decode(errors='replace')}")
-    return Measured(wall, cpu)
+    return Measured(wall, cpu, servers)
 
 
 def environment(tree: Tree) -> dict[str, str]:
@@ -172,11 +256,22 @@ def variants(work: Path, count: int) -> Path:
     return work
 
 
-def batch(source: Path, run_dir: Path, tree: Tree, slots: int, command: Sequence[str] = ()) -> Measured:
-    """``scenario_batch_execution -i variants -o results -j slots [-- command]`` in a fresh folder."""
+#: ``scenario_batch_execution`` in a process that takes the machine for one of ``sys.argv[1]`` cores
+#: (``--pretend-cores``: the runner's own count patched, so it starts as many forkers as it would there).
+AS_IF_CORES = ("import sys; import executor.batch.builtin_runner as runner; cores = int(sys.argv.pop(1)); "
+               "runner.usable_cpus = lambda: cores; sys.argv[0] = 'scenario_batch_execution'; "
+               "from cli.scenario_batch_execution import main; main()")
+
+
+def batch(source: Path, run_dir: Path, tree: Tree, slots: int, command: Sequence[str] = (),
+          cores: int | None = None) -> Measured:
+    """``scenario_batch_execution -i variants -o results -j slots [-- command]`` in a fresh folder (as on a
+    machine of ``cores`` usable cores, when given)."""
     run_dir.mkdir(parents=True)
     shutil.copy(source / "store.db", run_dir / "store.db")
-    argv = [str(BIN / "scenario_batch_execution"), "-i", str(source / "variants"), "-o", "results", "-j",
+    program = [str(BIN / "scenario_batch_execution")] if cores is None else \
+        [sys.executable, "-c", AS_IF_CORES, str(cores)]
+    argv = [*program, "-i", str(source / "variants"), "-o", "results", "-j",
             str(slots), "--store", f"sqlite:///{run_dir / 'store.db'}"]
     if command:
         argv += ["--", *command]
@@ -220,6 +315,17 @@ def job_counts(text: str | None, cpus: int) -> list[int]:
     return counts
 
 
+def busiest(measured: Measured, jobs: int) -> float:
+    """The own CPU per job (ms) of the busiest fork server of a run (0 when it started none)."""
+    return max(measured.servers, default=0.0) / jobs * 1000
+
+
+def serial_cap(measured: Measured, jobs: int) -> float:
+    """Jobs/s that one core allows the busier of the batch process and its busiest fork server (each is
+    one process, whatever -j): the ceiling of the built-in runner's throughput on many cores."""
+    return 1000 / max(measured.cpu / jobs * 1000, busiest(measured, jobs))
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", help="a source tree of an older commit to measure side by side")
@@ -229,6 +335,10 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=1, help="runs of each; the best is reported")
     parser.add_argument("--jobs", help="the -j values of the throughput sweep, e.g. 1,2,4,8,16 (default: "
                                        "1, 2, 4, … up to the usable CPUs)")
+    parser.add_argument("--cpu-slots", type=int, default=2, help="-j of the CPU figure's run (default 2)")
+    parser.add_argument("--pretend-cores", type=int, help="run the built-in batches as on a machine with this "
+                        "many usable cores (the runner starts the forkers it would start there), to see "
+                        "each forking process's CPU per job on a smaller machine")
     args = parser.parse_args()
     trees = [Tree("this tree", None)]
     if args.baseline:
@@ -257,18 +367,25 @@ def main() -> int:
         for round_ in range(args.rounds):
             for index, tree in enumerate(trees):
                 tag = f"{round_}_{index}"
-                keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, 2))
+                keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, args.cpu_slots, cores=args.pretend_cores))
                 keep((tree.label, "launched"), batch(launched, root / f"launched_{tag}", tree, 2,
                                                      ("sh", "-c", CHILD, "sh", "{SCENARIO}", "{OUTPUT_DIR}")))
                 for slots in sweep:
-                    keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots))
+                    keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots,
+                                                          cores=args.pretend_cores))
             wall = xargs(launched, root / f"xargs_{round_}")
             keep(("xargs", "launched"), Measured(wall, 0.0))
             keep(("machine", "reference"), Measured(0.0, reference(environment(Tree("this", None)))))
         print(f"\n{'':<28}" + "".join(f"{t.label[:34]:>36}" for t in trees))
         cells = [f"{best[(t.label, 'cpu')].cpu / args.variants * 1000:.2f} ms "
                  f"({best[(t.label, 'cpu')].cpu:.2f} s, wall {best[(t.label, 'cpu')].wall:.1f} s)" for t in trees]
-        print(f"{'batch CPU/job, built-in -j2':<28}" + "".join(f"{c:>36}" for c in cells))
+        print(f"{f'batch CPU/job, built-in -j{args.cpu_slots}':<28}" + "".join(f"{c:>36}" for c in cells))
+        cells = [f"{sum(best[(t.label, 'cpu')].servers) / args.variants * 1000:.2f} ms "
+                 f"({len(best[(t.label, 'cpu')].servers)} proc., busiest {busiest(best[(t.label, 'cpu')], args.variants):.2f})"
+                 for t in trees]
+        print(f"{f'forking CPU/job, -j{args.cpu_slots}':<28}" + "".join(f"{c:>36}" for c in cells))
+        cells = [f"{serial_cap(best[(t.label, 'cpu')], args.variants):.0f} jobs/s" for t in trees]
+        print(f"{'  one-core cap (busiest)':<28}" + "".join(f"{c:>36}" for c in cells))
         yardstick = best[("machine", "reference")].cpu
         cells = [f"{best[(t.label, 'cpu')].cpu / args.variants * 1000 / yardstick:.2f} ms/ref-s" for t in trees]
         print(f"{'  per reference second':<28}" + "".join(f"{c:>36}" for c in cells)
@@ -296,6 +413,10 @@ def main() -> int:
             "cpu_ms_per_job": round(best[(t.label, "cpu")].cpu / args.variants * 1000, 3),
             "cpu_ms_per_job_per_reference_s": round(best[(t.label, "cpu")].cpu / args.variants * 1000 / yardstick, 3),
             "cpu_wall_s": round(best[(t.label, "cpu")].wall, 3),
+            "fork_server_cpu_ms_per_job": round(sum(best[(t.label, "cpu")].servers) / args.variants * 1000, 3),
+            "fork_servers": len(best[(t.label, "cpu")].servers),
+            "forking_cpu_ms_per_job_each": [round(cpu / args.variants * 1000, 3) for cpu in best[(t.label, "cpu")].servers],
+            "one_core_cap_jobs_per_s": round(serial_cap(best[(t.label, "cpu")], args.variants), 1),
             "launched_s": round(best[(t.label, "launched")].wall, 3),
             "launched_over_xargs": round(best[(t.label, "launched")].wall / xargs_wall, 3),
             "jobs_per_s": {str(slots): round(args.throughput / best[(t.label, f"j{slots}")].wall, 1)

@@ -342,7 +342,7 @@ def serial_cap(measured: Measured, jobs: int) -> float:
     return 1000 / max(measured.cpu / jobs * 1000, busiest(measured, jobs))
 
 
-def main() -> int:
+def arguments() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", help="a source tree of an older commit to measure side by side")
     parser.add_argument("--variants", type=int, default=2000, help="built-in jobs for the CPU figure")
@@ -355,7 +355,96 @@ def main() -> int:
     parser.add_argument("--pretend-cores", type=int, help="run the built-in batches as on a machine with this "
                         "many usable cores (the runner starts the forkers it would start there), to see "
                         "each forking process's CPU per job on a smaller machine")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+#: The best run of each kind, by (tree label or "xargs"/"machine", kind).
+Best = dict[tuple[str, str], Measured]
+
+
+def measure(args: argparse.Namespace, trees: Sequence[Tree], sweep: Sequence[int], root: Path) -> Best:
+    """Every run, ``--rounds`` times, the trees alternating; the best of each kind kept: the least own
+    CPU for the CPU figure and the yardstick (a CPU figure's wall time is that run's), the shortest
+    wall time else."""
+    big, launched, small = (variants(root / name, n) for name, n in
+                            (("big", args.variants), ("launched", args.launched), ("small", args.throughput)))
+    best: Best = {}
+
+    def keep(key: tuple[str, str], measured: Measured) -> None:
+        def figure(run: Measured) -> float:
+            return run.cpu if key[1] in ("cpu", "reference") else run.wall
+
+        if key not in best or figure(measured) < figure(best[key]):
+            best[key] = measured
+
+    for round_ in range(args.rounds):
+        for index, tree in enumerate(trees):
+            tag = f"{round_}_{index}"
+            keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, args.cpu_slots, cores=args.pretend_cores))
+            keep((tree.label, "launched"), batch(launched, root / f"launched_{tag}", tree, 2,
+                                                 ("sh", "-c", CHILD, "sh", "{SCENARIO}", "{OUTPUT_DIR}")))
+            for slots in sweep:
+                keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots,
+                                                      cores=args.pretend_cores))
+        keep(("xargs", "launched"), Measured(xargs(launched, root / f"xargs_{round_}"), 0.0))
+        keep(("machine", "reference"), Measured(0.0, reference(environment(Tree("this", None)))))
+    return best
+
+
+def row(title: str, cells: Sequence[str], note: str = "") -> None:
+    print(f"{title:<28}" + "".join(f"{cell:>36}" for cell in cells) + note)
+
+
+def print_table(args: argparse.Namespace, trees: Sequence[Tree], sweep: Sequence[int], best: Best) -> None:
+    """The figures of each tree side by side, one row each."""
+    print(f"\n{'':<28}" + "".join(f"{t.label[:34]:>36}" for t in trees))
+    cpu = [best[(t.label, "cpu")] for t in trees]
+    row(f"batch CPU/job, built-in -j{args.cpu_slots}",
+        [f"{m.cpu / args.variants * 1000:.2f} ms ({m.cpu:.2f} s, wall {m.wall:.1f} s)" for m in cpu])
+    row(f"forking CPU/job, -j{args.cpu_slots}", [f"{sum(m.servers) / args.variants * 1000:.2f} ms "
+                                               f"({len(m.servers)} proc., busiest {busiest(m, args.variants):.2f})"
+                                               for m in cpu])
+    row("  one-core cap (busiest)", [f"{serial_cap(m, args.variants):.0f} jobs/s" for m in cpu])
+    yardstick = best[("machine", "reference")].cpu
+    row("  per reference second", [f"{m.cpu / args.variants * 1000 / yardstick:.2f} ms/ref-s" for m in cpu],
+        f"   (reference workload: {yardstick:.2f} s CPU)")
+    xargs_wall = best[("xargs", "launched")].wall
+    row(f"launched {args.launched} jobs -j2", [f"{best[(t.label, 'launched')].wall:.2f} s = "
+                                              f"{best[(t.label, 'launched')].wall / xargs_wall:.2f}x" for t in trees],
+        f"   (xargs -P 2: {xargs_wall:.2f} s)")
+    for slots in sweep:
+        cells, running = [], []
+        for t in trees:
+            rate, one = (args.throughput / best[(t.label, key)].wall for key in (f"j{slots}", "j1"))
+            cells.append(f"{rate:.0f} jobs/s ({rate / one:.2f}x -j1)")
+            rate, one = (args.throughput / span(best[(t.label, key)]) for key in (f"j{slots}", "j1"))
+            running.append(f"{rate:.0f} jobs/s ({rate / one:.2f}x -j1)")
+        row(f"built-in -j{slots}, {args.throughput} jobs", cells)
+        row("  while jobs ran", running)
+
+
+def tree_figures(args: argparse.Namespace, label: str, sweep: Sequence[int], best: Best) -> dict[str, object]:
+    """One tree's figures for the JSON line."""
+    cpu = best[(label, "cpu")]
+    per_job = cpu.cpu / args.variants * 1000
+    launched = best[(label, "launched")].wall
+    return {
+        "cpu_ms_per_job": round(per_job, 3),
+        "cpu_ms_per_job_per_reference_s": round(per_job / best[("machine", "reference")].cpu, 3),
+        "cpu_wall_s": round(cpu.wall, 3),
+        "fork_server_cpu_ms_per_job": round(sum(cpu.servers) / args.variants * 1000, 3),
+        "fork_servers": len(cpu.servers),
+        "forking_cpu_ms_per_job_each": [round(each / args.variants * 1000, 3) for each in cpu.servers],
+        "one_core_cap_jobs_per_s": round(serial_cap(cpu, args.variants), 1),
+        "launched_s": round(launched, 3),
+        "launched_over_xargs": round(launched / best[("xargs", "launched")].wall, 3),
+        "jobs_per_s": {str(slots): round(args.throughput / best[(label, f"j{slots}")].wall, 1) for slots in sweep},
+        "jobs_per_s_while_running": {str(slots): round(args.throughput / span(best[(label, f"j{slots}")]), 1)
+                                     for slots in sweep}}
+
+
+def main() -> int:
+    args = arguments()
     trees = [Tree("this tree", None)]
     if args.baseline:
         trees.insert(0, Tree(f"baseline {args.baseline}", str(Path(args.baseline).resolve())))
@@ -364,89 +453,20 @@ def main() -> int:
     print(f"{cpus} usable CPUs; load average {os.getloadavg()[0]:.2f} at start", flush=True)
     for tree in trees:
         compile_tree(tree)
-    failures = 0
     with tempfile.TemporaryDirectory(prefix="bench_batch_process_") as tmp:
-        root = Path(tmp)
-        big, launched, small = (variants(root / name, n) for name, n in
-                                (("big", args.variants), ("launched", args.launched), ("small", args.throughput)))
-        best: dict[tuple[str, str], Measured] = {}
-
-        def keep(key: tuple[str, str], measured: Measured) -> None:
-            """The best run of each kind: the least own CPU for the CPU figure (its wall time is that run's),
-            the shortest wall time else."""
-            def figure(run: Measured) -> float:
-                return run.cpu if key[1] in ("cpu", "reference") else run.wall
-
-            if key not in best or figure(measured) < figure(best[key]):
-                best[key] = measured
-
-        for round_ in range(args.rounds):
-            for index, tree in enumerate(trees):
-                tag = f"{round_}_{index}"
-                keep((tree.label, "cpu"), batch(big, root / f"cpu_{tag}", tree, args.cpu_slots, cores=args.pretend_cores))
-                keep((tree.label, "launched"), batch(launched, root / f"launched_{tag}", tree, 2,
-                                                     ("sh", "-c", CHILD, "sh", "{SCENARIO}", "{OUTPUT_DIR}")))
-                for slots in sweep:
-                    keep((tree.label, f"j{slots}"), batch(small, root / f"j{slots}_{tag}", tree, slots,
-                                                          cores=args.pretend_cores))
-            wall = xargs(launched, root / f"xargs_{round_}")
-            keep(("xargs", "launched"), Measured(wall, 0.0))
-            keep(("machine", "reference"), Measured(0.0, reference(environment(Tree("this", None)))))
-        print(f"\n{'':<28}" + "".join(f"{t.label[:34]:>36}" for t in trees))
-        cells = [f"{best[(t.label, 'cpu')].cpu / args.variants * 1000:.2f} ms "
-                 f"({best[(t.label, 'cpu')].cpu:.2f} s, wall {best[(t.label, 'cpu')].wall:.1f} s)" for t in trees]
-        print(f"{f'batch CPU/job, built-in -j{args.cpu_slots}':<28}" + "".join(f"{c:>36}" for c in cells))
-        cells = [f"{sum(best[(t.label, 'cpu')].servers) / args.variants * 1000:.2f} ms "
-                 f"({len(best[(t.label, 'cpu')].servers)} proc., busiest {busiest(best[(t.label, 'cpu')], args.variants):.2f})"
-                 for t in trees]
-        print(f"{f'forking CPU/job, -j{args.cpu_slots}':<28}" + "".join(f"{c:>36}" for c in cells))
-        cells = [f"{serial_cap(best[(t.label, 'cpu')], args.variants):.0f} jobs/s" for t in trees]
-        print(f"{'  one-core cap (busiest)':<28}" + "".join(f"{c:>36}" for c in cells))
-        yardstick = best[("machine", "reference")].cpu
-        cells = [f"{best[(t.label, 'cpu')].cpu / args.variants * 1000 / yardstick:.2f} ms/ref-s" for t in trees]
-        print(f"{'  per reference second':<28}" + "".join(f"{c:>36}" for c in cells)
-              + f"   (reference workload: {yardstick:.2f} s CPU)")
-        xargs_wall = best[("xargs", "launched")].wall
-        cells = [f"{best[(t.label, 'launched')].wall:.2f} s = {best[(t.label, 'launched')].wall / xargs_wall:.2f}x"
-                 for t in trees]
-        print(f"{f'launched {args.launched} jobs -j2':<28}" + "".join(f"{c:>36}" for c in cells)
-              + f"   (xargs -P 2: {xargs_wall:.2f} s)")
-        for slots in sweep:
-            cells, running = [], []
-            for t in trees:
-                rate = args.throughput / best[(t.label, f"j{slots}")].wall
-                one = args.throughput / best[(t.label, "j1")].wall
-                cells.append(f"{rate:.0f} jobs/s ({rate / one:.2f}x -j1)")
-                rate, one = (args.throughput / span(best[(t.label, key)]) for key in (f"j{slots}", "j1"))
-                running.append(f"{rate:.0f} jobs/s ({rate / one:.2f}x -j1)")
-            print(f"{f'built-in -j{slots}, {args.throughput} jobs':<28}" + "".join(f"{c:>36}" for c in cells))
-            print(f"{'  while jobs ran':<28}" + "".join(f"{c:>36}" for c in running))
-        mine = trees[-1].label
-        per_job = best[(mine, "cpu")].cpu / args.variants * 1000
-        ratio = best[(mine, "launched")].wall / xargs_wall
-        print(f"\ngoals for {mine}: batch CPU/job {per_job:.2f} ms (<= 0.5: {'met' if per_job <= 0.5 else 'MISSED'}); "
-              f"launched/xargs {ratio:.2f}x (<= 1.3: {'met' if ratio <= 1.3 else 'MISSED'})")
-        failures += per_job > 0.5
-        failures += ratio > 1.3
-        figures = {t.label: {
-            "cpu_ms_per_job": round(best[(t.label, "cpu")].cpu / args.variants * 1000, 3),
-            "cpu_ms_per_job_per_reference_s": round(best[(t.label, "cpu")].cpu / args.variants * 1000 / yardstick, 3),
-            "cpu_wall_s": round(best[(t.label, "cpu")].wall, 3),
-            "fork_server_cpu_ms_per_job": round(sum(best[(t.label, "cpu")].servers) / args.variants * 1000, 3),
-            "fork_servers": len(best[(t.label, "cpu")].servers),
-            "forking_cpu_ms_per_job_each": [round(cpu / args.variants * 1000, 3) for cpu in best[(t.label, "cpu")].servers],
-            "one_core_cap_jobs_per_s": round(serial_cap(best[(t.label, "cpu")], args.variants), 1),
-            "launched_s": round(best[(t.label, "launched")].wall, 3),
-            "launched_over_xargs": round(best[(t.label, "launched")].wall / xargs_wall, 3),
-            "jobs_per_s": {str(slots): round(args.throughput / best[(t.label, f"j{slots}")].wall, 1)
-                           for slots in sweep},
-            "jobs_per_s_while_running": {str(slots): round(args.throughput / span(best[(t.label, f"j{slots}")]), 1)
-                                         for slots in sweep}} for t in trees}
-        print(json.dumps({"cpus": cpus, "reference_cpu_s": round(yardstick, 3), "variants": args.variants,
-                          "launched": args.launched,
-                          "throughput_jobs": args.throughput, "xargs_s": round(xargs_wall, 3), "trees": figures,
-                          "goals_met": {"cpu_ms_per_job": per_job <= 0.5, "launched_over_xargs": ratio <= 1.3}}))
-    return 1 if failures else 0
+        best = measure(args, trees, sweep, Path(tmp))
+    print_table(args, trees, sweep, best)
+    mine = trees[-1].label
+    per_job = best[(mine, "cpu")].cpu / args.variants * 1000
+    ratio = best[(mine, "launched")].wall / best[("xargs", "launched")].wall
+    print(f"\ngoals for {mine}: batch CPU/job {per_job:.2f} ms (<= 0.5: {'met' if per_job <= 0.5 else 'MISSED'}); "
+          f"launched/xargs {ratio:.2f}x (<= 1.3: {'met' if ratio <= 1.3 else 'MISSED'})")
+    print(json.dumps({"cpus": cpus, "reference_cpu_s": round(best[("machine", "reference")].cpu, 3),
+                      "variants": args.variants, "launched": args.launched, "throughput_jobs": args.throughput,
+                      "xargs_s": round(best[("xargs", "launched")].wall, 3),
+                      "trees": {t.label: tree_figures(args, t.label, sweep, best) for t in trees},
+                      "goals_met": {"cpu_ms_per_job": per_job <= 0.5, "launched_over_xargs": ratio <= 1.3}}))
+    return 1 if per_job > 0.5 or ratio > 1.3 else 0
 
 
 if __name__ == "__main__":

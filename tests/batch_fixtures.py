@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from collections import Counter
 from pathlib import Path
 
@@ -184,6 +185,13 @@ def watchdog_of(runner: int) -> int:
     found = [pid for pid, cmdline in children_of(runner) if b"watchdog.py" in cmdline]
     assert len(found) == 1, children_of(runner)
     return found[0]
+
+
+def wait_until_unmarked(mark: str, since: float, seconds: float) -> None:
+    """Wait until no process carries ``mark`` (see :func:`marked`); fail if one does ``seconds`` after ``since``."""
+    while marked(mark):
+        assert time.monotonic() - since < seconds, f"alive {seconds} s after kill -9: {marked(mark)}"
+        time.sleep(0.05)
 
 
 def marked(mark: str) -> list[int]:

@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
+from batch_fixtures import alive, cli_env, marked, run_cli, start_cli, wait_until_unmarked
 from probe_variants import make_variants, records
 from tests_schema import assert_valid
 
@@ -152,9 +152,7 @@ def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, la
     runner.send_signal(signal.SIGKILL)
     runner.communicate(timeout=10)
     killed_at = time.monotonic()
-    while marked(mark):
-        assert time.monotonic() - killed_at < 3, f"alive 3 s after kill -9: {marked(mark)}"
-        time.sleep(0.05)
+    wait_until_unmarked(mark, killed_at, 3)
     while any(scratch.iterdir()):                    # and so are the runner's temporary folders
         assert time.monotonic() - killed_at < 5, f"left behind: {sorted(p.name for p in scratch.iterdir())}"
         time.sleep(0.05)

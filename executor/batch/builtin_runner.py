@@ -33,7 +33,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
 from executor.batch.fork_protocol import command_target, receive, send
-from executor.children.process import StartTicket, kill_orphan
+from executor.children.process import RUNNER_ENV, StartTicket, kill_orphan
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
 BUILTIN_COMMAND = ("scenario_execution", "{SCENARIO}", "--output-dir", "{OUTPUT_DIR}")
@@ -157,6 +157,12 @@ class ForkServer:
     @property
     def alive(self) -> bool:
         return self._alive
+
+    @property
+    def mark(self) -> str | None:
+        """``RUNNER_ENV=<worker id>`` when the server's environment has it: every process it forks carries it."""
+        runner = self.environment.get(RUNNER_ENV)
+        return None if runner is None else f"{RUNNER_ENV}={runner}"
 
     def start(self) -> ForkServer:
         """Start the server and wait until it is ready; :class:`ForkServerError` if it cannot be."""
@@ -382,7 +388,7 @@ class ForkServer:
             item.reason = "the fork server ended"
             item.event.set()
         for process in running:            # their parent is gone: nobody else can wait for them
-            kill_orphan(process.pid)
+            kill_orphan(process.pid, self.mark)
             process._exited(-signal.SIGKILL)
 
     def _dispatch(self, message: dict) -> None:

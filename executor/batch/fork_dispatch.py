@@ -13,7 +13,8 @@ forks ``count`` copies of itself (warm, with nothing loaded twice), each a
 dispatcher:
 
 * it reads the runner's requests and keeps the waiting ones in arrival order; no more than ``limit``
-  jobs run at once over all forkers, and each next request goes to the forker running the fewest;
+  jobs run at once over all forkers, and each next request goes to the forker running the fewest
+  (never blocking on one whose socket is full: it waits here until that forker has room);
 * a ``withdraw`` of a request that still waits is answered here (``withdrawn``); one handed to a
   forker has started, and the runner stops it as any other;
 * the forkers send their replies (``started``, ``failed``, ``exited``) straight to the runner on the
@@ -31,16 +32,19 @@ from __future__ import annotations
 import os
 import select
 import socket
+import sys
+from collections import OrderedDict
 from collections.abc import Callable
 
-from executor.batch.fork_protocol import receive, send
+from executor.batch.fork_protocol import fork_paired, receive, send
 
 
-class _Forker:
-    """One forking copy of the server: its pid, the socket to it, and the jobs it was given and not done with."""
+class Forker:
+    """One forking copy of the server: its pid, the socket to it, the jobs it was given and not done
+    with, and whether its socket had no room for the last request (the dispatcher waits until it has)."""
 
     def __init__(self, pid: int, sock: socket.socket) -> None:
-        self.pid, self.sock, self.running = pid, sock, 0
+        self.pid, self.sock, self.running, self.full = pid, sock, 0, False
 
 
 class Dispatcher:
@@ -49,44 +53,42 @@ class Dispatcher:
     def __init__(self, sock: socket.socket, limit: int) -> None:
         self.sock = sock
         self.limit = limit                                  # jobs at once over all forkers (0: no limit)
-        self.forkers: list[_Forker] = []
-        self.waiting: dict[str, tuple[dict, list[int]]] = {}   # request id -> (request, its descriptors)
+        self.forkers: list[Forker] = []
+        self.waiting: OrderedDict[str, tuple[dict, list[int]]] = OrderedDict()   # id -> (request, descriptors)
 
     def start_forkers(self, count: int, serve_forker: Callable[[socket.socket], None]) -> None:
         """Fork ``count`` forkers, each running ``serve_forker`` on its end of a socket pair to this
         process (it returns when that socket closes, and the forker ends). Raises ``OSError`` when one
         cannot be forked (those already forked end with this process)."""
         for _ in range(count):
-            mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-            try:
-                pid = os.fork()
-            except OSError:
-                mine.close()
-                theirs.close()
-                raise
+            pid, sock = fork_paired()
             if pid == 0:
                 code = 1
                 try:
-                    mine.close()
                     for forker in self.forkers:              # the other forkers' sockets are not this one's
                         forker.sock.close()
-                    serve_forker(theirs)
+                    serve_forker(sock)
                     code = 0
+                except BaseException:  # noqa: BLE001 - said on the runner's stderr, as the server's own end would be
+                    sys.excepthook(*sys.exc_info())
+                    sys.stderr.flush()
                 finally:
                     os._exit(code)
-            theirs.close()
-            self.forkers.append(_Forker(pid, mine))
+            self.forkers.append(Forker(pid, sock))
 
     def serve(self) -> None:
         """Dispatch until the runner closes its end or a forker ends; then end the forkers and wait for them."""
         try:
             while True:
-                ready, _, _ = select.select([self.sock, *(forker.sock for forker in self.forkers)], [], [])
+                ready, room, _ = select.select([self.sock, *(forker.sock for forker in self.forkers)],
+                                               [forker.sock for forker in self.forkers if forker.full], [])
                 if self.sock in ready and not self._read_requests():
                     return
                 for forker in self.forkers:
                     if forker.sock in ready and not self._read_notes(forker):
                         return
+                    if forker.sock in room:
+                        forker.full = False
                 if not self._dispatch():
                     return
         finally:
@@ -99,6 +101,8 @@ class Dispatcher:
                 message, fds = receive(self.sock, max_fds=1, flags=socket.MSG_DONTWAIT)
             except BlockingIOError:
                 return True
+            except ConnectionResetError:       # the runner closed with replies unread: closed all the same
+                return False
             if message is None:
                 return False
             if "withdraw" in message:
@@ -106,7 +110,7 @@ class Dispatcher:
             else:
                 self.waiting[str(message.get("id"))] = (message, fds)
 
-    def _read_notes(self, forker: _Forker) -> bool:
+    def _read_notes(self, forker: Forker) -> bool:
         """What ``forker`` says (a request done with); False when it has ended."""
         while True:
             try:
@@ -128,18 +132,30 @@ class Dispatcher:
 
     def _dispatch(self) -> bool:
         """Hand the waiting requests, oldest first, to the least busy forkers while fewer than ``limit``
-        run; False when a forker has ended (it cannot be sent to)."""
+        run; False when a forker has ended (it cannot be sent to).
+
+        Never waits for a forker: one whose socket is full (it is busy reaping a burst of ends, and
+        sending the notes this process must read) keeps the request waiting here until it has room.
+        Waiting for it would stop this process reading those notes, and both would wait for good."""
         while self.waiting and not (self.limit and sum(f.running for f in self.forkers) >= self.limit):
-            request_id = next(iter(self.waiting))
-            request, fds = self.waiting.pop(request_id)
-            forker = min(self.forkers, key=lambda f: f.running)
+            open_forkers = [forker for forker in self.forkers if not forker.full]
+            if not open_forkers:
+                return True
+            forker = min(open_forkers, key=lambda f: f.running)
+            request_id, (request, fds) = self.waiting.popitem(last=False)
             try:
-                send(forker.sock, request, fds)
+                send(forker.sock, request, fds, socket.MSG_DONTWAIT)
+            except BlockingIOError:
+                self.waiting[request_id] = (request, fds)
+                self.waiting.move_to_end(request_id, last=False)
+                forker.full = True
+                continue
             except OSError:
-                return False
-            finally:
                 for fd in fds:
                     os.close(fd)
+                return False
+            for fd in fds:
+                os.close(fd)
             forker.running += 1
         return True
 

@@ -60,6 +60,24 @@ def open_log(request: dict) -> int:
     return os.open(request["log"], flags, 0o666)
 
 
+def fork_paired() -> tuple[int, socket.socket]:
+    """Fork, with a socket pair (``SOCK_SEQPACKET``) between parent and child: ``(child's pid, the
+    parent's end)`` in the parent, ``(0, the child's end)`` in the child; ``OSError`` when the fork
+    fails (both ends closed)."""
+    mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+    try:
+        pid = os.fork()
+    except OSError:
+        mine.close()
+        theirs.close()
+        raise
+    if pid == 0:
+        mine.close()
+        return 0, theirs
+    theirs.close()
+    return pid, mine
+
+
 def send(sock: socket.socket, message: dict, fds: list[int] | None = None, flags: int = 0) -> None:
     """One JSON message, with file descriptors attached when given (``flags``: ``socket.MSG_DONTWAIT``
     raises :class:`BlockingIOError` instead of waiting for room; a message is sent whole or not at all)."""

@@ -50,7 +50,7 @@ import socket
 import sys
 
 from executor.batch.fork_child import HELD_BACK, run_child
-from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, open_log, receive, send
+from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, fork_paired, open_log, receive, send
 
 
 class Command:
@@ -230,7 +230,10 @@ class _Server:
     def _read_messages(self) -> bool:
         """Handle every message the runner has sent so far; False when it closed its end."""
         while True:
-            message, fds = receive(self.requests, max_fds=1)
+            try:
+                message, fds = receive(self.requests, max_fds=1)
+            except ConnectionResetError:       # the other end closed with our messages unread: closed all the same
+                return False
             if message is None:
                 return False
             if "withdraw" in message:
@@ -332,18 +335,13 @@ class _Server:
 
     def _new_spare(self) -> None:
         """Fork a spare child that warms itself up and waits for a job (see the module's doc)."""
-        mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         try:
-            pid = os.fork()
+            pid, sock = fork_paired()
         except OSError:
-            mine.close()
-            theirs.close()
             return
         if pid == 0:
-            mine.close()
-            _run_spare(theirs, self)
-        theirs.close()
-        self.spare = _Spare(pid, mine)
+            _run_spare(sock, self)
+        self.spare = _Spare(pid, sock)
 
     def close_in_child(self) -> None:
         """What a job must not keep of the server: its socket, wake-up pipe, the spare's socket and the

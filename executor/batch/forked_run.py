@@ -67,7 +67,7 @@ class ForkedRun(LoopRun):
             return [self._failed(message)]
         if self.pid is None:                       # "gone" before the start
             return [self._failed({"reason": "the fork server ended"})]
-        kill_orphan(self.pid)                      # its parent is gone: nobody else can wait for it
+        kill_orphan(self.pid, self.server.mark)    # its parent is gone: nobody else can wait for it
         return self._on_exited(-signal.SIGKILL)
 
     def _failed(self, message: dict) -> Done:

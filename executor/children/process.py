@@ -115,11 +115,17 @@ def kill_group(pgid: int, sig: int = signal.SIGKILL) -> bool:
         return False
 
 
-def kill_orphan(pid: int) -> None:
-    """SIGKILL to a job whose parent (the fork server) is gone: to its group and to the process itself,
-    which may not lead a group yet when it was forked a moment before."""
-    kill_group(pid)
+def kill_orphan(pid: int, mark: str | None = None) -> None:
+    """SIGKILL to a job whose parent (the fork server) is gone: to its group, and, when there is no such
+    group (a child forked a moment before may not lead one yet), to the process itself if it carries
+    ``mark`` (``RUNNER_ENV=<worker id>``, which every process of that server has) in its environment:
+    a process id that was reused meanwhile belongs to a process without it."""
+    if kill_group(pid) or mark is None:
+        return
     try:
+        with open(f"/proc/{pid}/environ", "rb") as handle:
+            if mark.encode() not in handle.read().split(b"\0"):
+                return
         os.kill(pid, signal.SIGKILL)
     except OSError:
         pass

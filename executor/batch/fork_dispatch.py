@@ -1,10 +1,10 @@
 """Several processes fork the jobs: the fork server, once warm, becomes a dispatcher of forkers.
 
 Why: forking a warm interpreter is the fork server's work for every job, and it is not small. Measured
-on the project's 2-core VM (``benchmarks/bench_batch_process.py``, 2,000 trivial jobs at -j 2): the
-server's own CPU was 1.66 ms a job, twice the batch process's, nine tenths of it in the kernel (the
+on the project's 2-core VM (``benchmarks/bench_batch_process.py``, 2,000 trivial jobs): the server's own
+CPU was 1.3-1.8 ms a job, about twice the batch process's, nine tenths of it in the kernel (the
 ``fork`` copying its page tables, then a copy of every page the server writes while the child still
-shares it). One process forking every job caps a worker at about 600 jobs a second whatever its
+shares it). One process forking every job caps a worker at about 600-750 jobs a second whatever its
 ``-j``, which is below what 16 cores run of short jobs.
 
 So with many slots (:func:`~executor.batch.builtin_runner.forkers_for`) the server, after its preload,

@@ -89,11 +89,15 @@ def send(sock: socket.socket, message: dict, fds: list[int] | None = None, flags
 
 
 def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0) -> tuple[dict | None, list[int]]:
-    """The next message (None when the other end closed) and the descriptors that came with it
-    (``flags``: ``socket.MSG_DONTWAIT`` raises :class:`BlockingIOError` when none is waiting)."""
+    """The next message (None when the other end closed, also when it closed with messages of ours
+    unread, which Linux reports as a reset) and the descriptors that came with it (``flags``:
+    ``socket.MSG_DONTWAIT`` raises :class:`BlockingIOError` when none is waiting)."""
     fds = array.array("i")
-    data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, socket.CMSG_SPACE(max_fds * fds.itemsize)
-                                                  if max_fds else 0, flags)
+    try:
+        data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, socket.CMSG_SPACE(max_fds * fds.itemsize)
+                                                      if max_fds else 0, flags)
+    except ConnectionResetError:
+        return None, []
     for level, kind, payload in ancillary:
         if level == socket.SOL_SOCKET and kind == socket.SCM_RIGHTS:
             fds.frombytes(payload[:len(payload) - len(payload) % fds.itemsize])

@@ -140,40 +140,49 @@ def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, s
 
     Subcommands for several hosts sharing one store: worker, status, report (see '<subcommand> --help').
     """
-    from executor.batch import orchestration
-    from executor.batch.progress import make_reporter
-    from store.jobs import BatchOptions
-
     input_dir = input_dirs[0] if input_dirs else None
     _check_run_options(input_dir=input_dir, command=command, simulation=simulation, resume=resume,
                        rerun_failed=rerun_failed, only_new=only_new, enqueue_only=enqueue_only, post_run=post_run)
-    request = orchestration.BatchRequest(
-        input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
-        options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
-                             ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
-                             simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
-                             pass_rate=pass_rate),
-        shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
-    store = _open_store(store_url)
-    lock = None
+    from executor.batch.hand_over import start_early
+
+    # the built-in runner's fork server starts now, so that its imports and preload overlap ours (the store,
+    # the inputs); the worker adopts it
+    early = start_early(slots) if not (command or resume or rerun_failed or enqueue_only) else None
     try:
-        if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
-            lock = _lock_output(request.output_dir, wait)
-        batch = _batch_to_run(store, request, output_dir, resume=resume, rerun_failed=rerun_failed,
-                              only_new=only_new, enqueue_only=enqueue_only)
-        if isinstance(batch, int):
-            return batch
-        if enqueue_only:
-            count = sum(store.counts(batch.id).values())
-            click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
-                       f"'{PROG} worker --store URL' on each host")
-            return 0
-        ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease)
-        return _report_run(store, batch, ran, shard)
+        from executor.batch import orchestration
+        from executor.batch.progress import make_reporter
+        from store.jobs import BatchOptions
+
+        request = orchestration.BatchRequest(
+            input_dir=input_dir, output_dir=orchestration.output_folder(output_dir), command=tuple(command),
+            options=BatchOptions(timeout=timeout, retries=retries, post_run=tuple(post_run),
+                                 ignore_return_value=ignore_return_value, halt_on_failure=halt_on_failure, grace=grace,
+                                 simulation=simulation, repeat=repeat[0], until_fail=repeat[1] and repeat[0] > 1,
+                                 pass_rate=pass_rate),
+            shard=shard, more_inputs=tuple(input_dirs[1:]), recursive=recursive)
+        store = _open_store(store_url)
+        lock = None
+        try:
+            if not resume and not enqueue_only:   # --resume joins a batch (the store coordinates); others wait or stop
+                lock = _lock_output(request.output_dir, wait)
+            batch = _batch_to_run(store, request, output_dir, resume=resume, rerun_failed=rerun_failed,
+                                  only_new=only_new, enqueue_only=enqueue_only)
+            if isinstance(batch, int):
+                return batch
+            if enqueue_only:
+                count = sum(store.counts(batch.id).values())
+                click.echo(f"batch {batch.id}: {count} job(s) queued in {store.url}; run "
+                           f"'{PROG} worker --store URL' on each host")
+                return 0
+            ran = orchestration.run_local(store, batch, slots, make_reporter(slots), lease=lease, early=early)
+            return _report_run(store, batch, ran, shard)
+        finally:
+            store.close()
+            if lock is not None:
+                lock.release()
     finally:
-        store.close()
-        if lock is not None:
-            lock.release()
+        if early is not None:
+            early.server.close()          # (the worker has closed it already, when it ran)
 
 
 def _check_run_options(*, input_dir: str | None, command: Sequence[str], simulation: str | None, resume: bool,

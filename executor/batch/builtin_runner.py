@@ -153,6 +153,7 @@ class ForkServer:
         self._reader: threading.Thread | None = None   # reads the replies once a thread waits in spawn()
         self._ids = itertools.count(1)
         self._alive = False
+        self._starting: socket.socket | None = None   # launched, not yet ready (see launch)
 
     @property
     def alive(self) -> bool:
@@ -166,6 +167,11 @@ class ForkServer:
 
     def start(self) -> ForkServer:
         """Start the server and wait until it is ready; :class:`ForkServerError` if it cannot be."""
+        return self.launch().wait_ready()
+
+    def launch(self) -> ForkServer:
+        """Start the server's process, not waiting for it: its imports and preload go on meanwhile, and
+        :meth:`wait_ready` waits for them; :class:`ForkServerError` if it cannot be started."""
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         script_dir = os.path.dirname(sys.executable)
         code = ("import sys; sys.path[0] = sys.argv[1]; from executor.batch.fork_server import serve; "
@@ -192,6 +198,15 @@ class ForkServer:
             raise ForkServerError(f"cannot start the built-in runner: {exc.strerror or exc}") from exc
         finally:
             theirs.close()
+        self._starting = mine
+        return self
+
+    def wait_ready(self) -> ForkServer:
+        """Wait until the launched server is ready (see :meth:`launch`); :class:`ForkServerError` if it
+        ended instead, or said why it cannot serve."""
+        mine, self._starting = self._starting, None
+        if mine is None:
+            raise ForkServerError("the built-in runner cannot start: it was closed before it was ready")
         mine.settimeout(START_TIMEOUT)
         try:
             message, _ = receive(mine)
@@ -419,8 +434,14 @@ class ForkServer:
                 process._exited(code)
 
     def close(self) -> None:
-        """Stop the server (it kills the jobs still running) and wait for it."""
+        """Stop the server (it kills the jobs still running) and wait for it. One launched and never waited
+        for ends as soon as it finds the socket closed: when its preload is done, or at once if it was
+        serving already (its spare, a process of its own, ends with it: a SIGKILL of the server alone
+        would leave the spare warming up in the scratch folder)."""
         self._alive = False
+        if self._starting is not None:
+            self._starting.close()
+            self._starting = None
         if self._sock is not None:
             try:
                 self._sock.shutdown(socket.SHUT_RDWR)

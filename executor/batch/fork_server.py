@@ -398,9 +398,18 @@ def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: i
         else:
             server = _Server(sock, command, scratch, keep_spare, limit)
     except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
-        send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
+        try:
+            send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
+        except OSError:
+            pass                                    # the runner has gone already
         raise SystemExit(1) from None
-    send(sock, {"event": "ready", "pid": os.getpid()})
+    try:
+        send(sock, {"event": "ready", "pid": os.getpid()})
+    except OSError:                                 # the runner went away while this one was preloading
+        import shutil
+
+        shutil.rmtree(scratch, ignore_errors=True)     # (the runner would have removed it)
+        raise SystemExit(0) from None
     if forkers > 1:
         dispatcher.serve()
     else:

@@ -24,6 +24,7 @@ from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
 from executor.batch.batch_outcome import BatchOutcome, batch_outcome
 from executor.batch.errors import BatchError, NothingToResume
+from executor.batch.hand_over import EarlyServer
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
@@ -223,9 +224,12 @@ def interrupts_stop(worker: Worker) -> Iterator[list[int]]:
 
 
 def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
-               total: int | None = None, done: int = 0) -> tuple[WorkerSummary, int | None]:
-    """Run a worker until it runs out of work or is interrupted; returns its summary and the signal."""
-    worker = Worker(store, settings, reporter)
+               total: int | None = None, done: int = 0,
+               early: EarlyServer | None = None) -> tuple[WorkerSummary, int | None]:
+    """Run a worker until it runs out of work or is interrupted; returns its summary and the signal
+    (``early``: a fork server launched for it before the batch was known, see ``hand_over.start_early``)."""
+    worker = Worker(store, settings, reporter) if early is None else \
+        Worker(store, settings, reporter, early.identity, early.server)
     reporter.begin(total, done)
     try:
         with interrupts_stop(worker) as received:
@@ -254,11 +258,12 @@ DISK_FULL_NAME = "no space left on device"
 
 
 def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *,
-              lease: float = DEFAULT_LEASE, echo_children: bool = True) -> LocalRun:
+              lease: float = DEFAULT_LEASE, echo_children: bool = True, early: EarlyServer | None = None) -> LocalRun:
     """Run the batch's remaining jobs here with ``slots`` parallel children; write the merged report.
 
     With one slot the child's own output is shown as it runs, unless ``echo_children`` is False (the
-    search loop, whose output is a line per round).
+    search loop, whose output is a line per round). ``early``: a fork server the command line launched
+    for this run before the batch was known (``hand_over.start_early``).
 
     A full disk stops the run like an interruption (the jobs it stopped stay resumable); the report of
     what finished is still attempted, and if it cannot be written either, the run says so instead of
@@ -269,7 +274,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
     done = sum(counts[s] for s in (JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TIMEOUT))
     settings = WorkerSettings(slots=slots, batch_id=batch.id, lease=lease, poll=0.2,
                               echo=sys.stdout.buffer if slots == 1 and echo_children else None, cwd=os.getcwd(), hand_over_ahead=True)
-    summary, signum = run_worker(store, settings, reporter, total, done)
+    summary, signum = run_worker(store, settings, reporter, total, done, early)
     interrupted = None if signum is None else INTERRUPTION_NAMES.get(signum, f"signal {int(signum)}")
     if summary.disk_full is not None and interrupted is None:
         interrupted = DISK_FULL_NAME

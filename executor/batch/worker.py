@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
-from executor.batch.builtin_runner import ForkServerError
+from executor.batch.builtin_runner import ForkServer, ForkServerError
 from executor.batch.claim_pacing import ClaimPacer, StoreBackoff
 from executor.batch.forked_run import ForkedRun, Reply
 from executor.batch.hand_over import HandOver
@@ -81,7 +81,8 @@ class Worker:
     """Run jobs from the queue until there is no work left (or :meth:`stop` is called)."""
 
     def __init__(self, store: QueueStore, settings: WorkerSettings, reporter: Reporter,
-                 identity: WorkerIdentity | None = None) -> None:
+                 identity: WorkerIdentity | None = None, early: ForkServer | None = None) -> None:
+        """``early``: a fork server launched for this worker (``identity``) before the batch was known."""
         self.store = store
         self.settings = settings
         self.reporter = reporter
@@ -92,7 +93,7 @@ class Worker:
         self.leases = LeaseKeeper(store, self.identity, lease=settings.lease, max_lost=settings.max_lost,
                                   batch_id=settings.batch_id)
         self.hand_over = HandOver(self.identity.id, settings.slots, ahead_allowed=settings.hand_over_ahead
-                                  and settings.batch_id is not None, forkers=settings.forkers)
+                                  and settings.batch_id is not None, forkers=settings.forkers, early=early)
         self.recorder = ResultRecorder(store, reporter, self.backoff, RecorderHooks(
             stop=self.stop, requeued=self.pacer.wake, halted=lambda _batch: self.pacer.idle(),
             stopping=self._stop_is_set), self.summary,

@@ -13,8 +13,8 @@ from pathlib import Path
 
 from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
 
-from executor.batch.builtin_runner import ForkServer
-from executor.batch.hand_over import HandOver, fork_server_environment, start_early
+from executor.batch.builtin_runner import ForkServer, fork_server_environment, start_early
+from executor.batch.hand_over import HandOver
 
 HANG = "import osc.helpers\n\nscenario hang{n}:\n    do serial:\n        wait elapsed(60s)\n        emit end\n"
 
@@ -87,6 +87,38 @@ def test_a_run_with_nothing_to_run_leaves_no_server_behind(tmp_path):
     assert "nothing new" in again.stdout, again.stdout + again.stderr
     assert marked(f"TMPDIR={scratch}") == []         # the server launched early is gone
     assert list(scratch.iterdir()) == []             # and so is its scratch folder
+
+
+def test_kill_9_of_a_command_waiting_for_its_folder_leaves_neither_its_server_nor_its_scratch(tmp_path):
+    # the server is launched before the worker (and its watchdog) exists: killed then, the command can
+    # remove nothing, and the server, finding its runner gone, must end and remove its folder itself
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "hang0.osc").write_text(HANG.format(n=0))
+    holder = start_cli(["-i", "in", "-o", "res", "-j", "1"], tmp_path, cli_env(tmp_path))
+    scratch = tmp_path / "waiting_tmp"
+    scratch.mkdir()
+    waiting = None
+    try:
+        deadline = time.monotonic() + 60
+        while store_state(tmp_path / ".scenario_store.db")[0] == 0:     # the first batch holds -o res
+            assert time.monotonic() < deadline and holder.poll() is None, "the first batch runs"
+            time.sleep(0.05)
+        waiting = start_cli(["-i", "in", "-o", "res", "--wait"], tmp_path, cli_env(tmp_path, TMPDIR=str(scratch)))
+        while not marked(f"TMPDIR={scratch}") or not any(scratch.iterdir()):   # its server, and its scratch
+            assert time.monotonic() < deadline and waiting.poll() is None, "the waiting command starts its server"
+            time.sleep(0.05)
+        time.sleep(1.0)                                  # (the server done preloading, or not: either way)
+        waiting.send_signal(signal.SIGKILL)
+        waiting.communicate(timeout=10)
+        killed_at = time.monotonic()
+        while marked(f"TMPDIR={scratch}") or any(scratch.iterdir()):
+            assert time.monotonic() - killed_at < 10, (marked(f"TMPDIR={scratch}"), list(scratch.iterdir()))
+            time.sleep(0.05)
+    finally:
+        for process in (holder, waiting):
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGINT)
+                process.communicate(timeout=30)
 
 
 def test_the_worker_adopts_an_early_server_launched_as_it_would_start_one(tmp_path, monkeypatch):

@@ -92,7 +92,7 @@ class Dispatcher:
                 if not self._dispatch():
                     return
         finally:
-            self._end()
+            self.end()
 
     def _read_requests(self) -> bool:
         """Every message the runner has sent so far; False when it closed its end."""
@@ -157,8 +157,9 @@ class Dispatcher:
             forker.running += 1
         return True
 
-    def _end(self) -> None:
-        """Close what waits and the forkers' sockets (each then kills its jobs and ends); wait for them."""
+    def end(self) -> None:
+        """Close what waits and the forkers' sockets (each then kills its jobs and ends); wait for them.
+        Again, it does nothing more."""
         for _request, fds in self.waiting.values():
             for fd in fds:
                 os.close(fd)

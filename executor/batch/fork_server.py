@@ -48,9 +48,13 @@ import select
 import signal
 import socket
 import sys
+from typing import TYPE_CHECKING
 
 from executor.batch.fork_child import HELD_BACK, run_child
 from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, fork_paired, open_log, receive, send
+
+if TYPE_CHECKING:
+    from executor.batch.fork_dispatch import Dispatcher
 
 
 class Command:
@@ -121,14 +125,22 @@ def run_probe(command: Command, folder: str) -> None:
 PRELOAD_RUNS = 10
 
 
-def preload(command: Command, scratch: str) -> None:
+class RunnerGone(Exception):
+    """The runner closed its end before this server was ready: it ends without serving."""
+
+
+def preload(command: Command, scratch: str, runner: socket.socket | None = None) -> None:
     """Run the probe in a folder under ``scratch`` (every lazily imported module loaded, every library
-    parsed, the code a job runs specialized), then freeze what was made."""
+    parsed, the code a job runs specialized), then freeze what was made. Between two probe runs,
+    :class:`RunnerGone` when ``runner``'s socket has become readable: the runner sends nothing before
+    the server is ready, so that is its end closing (a command that found nothing to run, or died)."""
     import gc
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="preload_", dir=scratch) as folder:
         for _ in range(PRELOAD_RUNS):
+            if runner is not None and select.select([runner], [], [], 0)[0]:
+                raise RunnerGone
             run_probe(command, folder)
     gc.collect()
     gc.freeze()            # objects made so far are never scanned again, so the children do not copy them
@@ -386,31 +398,40 @@ def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: i
         signal.signal(sig, signal.SIG_IGN)          # the runner decides; its children are in their own groups
     signal.pthread_sigmask(signal.SIG_BLOCK, HELD_BACK)   # and inherit them blocked (see fork_child.run_child)
     sock = socket.socket(fileno=fd)
+    dispatcher: Dispatcher | None = None
     try:
-        command = Command(target)
-        preload(command, scratch)
-        if forkers > 1:
-            from executor.batch.fork_dispatch import Dispatcher
-
-            dispatcher = Dispatcher(sock, limit)
-            dispatcher.start_forkers(forkers, lambda requests: _Server(sock, command, scratch, keep_spare,
-                                                                       requests=requests).serve())
-        else:
-            server = _Server(sock, command, scratch, keep_spare, limit)
-    except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
         try:
-            send(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
-        except OSError:
-            pass                                    # the runner has gone already
-        raise SystemExit(1) from None
-    try:
-        send(sock, {"event": "ready", "pid": os.getpid()})
-    except OSError:                                 # the runner went away while this one was preloading
+            command = Command(target)
+            preload(command, scratch, sock)
+            if forkers > 1:
+                from executor.batch.fork_dispatch import Dispatcher
+
+                dispatcher = Dispatcher(sock, limit)
+                dispatcher.start_forkers(forkers, lambda requests: _Server(sock, command, scratch, keep_spare,
+                                                                           requests=requests).serve())
+            server: _Server | Dispatcher = dispatcher or _Server(sock, command, scratch, keep_spare, limit)
+        except RunnerGone:
+            raise SystemExit(0) from None
+        except BaseException as exc:  # noqa: BLE001 - say why to the runner, then end
+            _tell(sock, {"event": "unavailable", "reason": f"{type(exc).__name__}: {exc}"})
+            raise SystemExit(1) from None
+        if not _tell(sock, {"event": "ready", "pid": os.getpid()}):
+            raise SystemExit(0)                     # the runner went away while this one was preloading
+        server.serve()
+    finally:
+        if dispatcher is not None:
+            dispatcher.end()                        # its forkers gone, and their spares with them
+        # every child that writes to the scratch folder (a spare warming up) has ended: the runner removes
+        # the folder too, but one that has gone (killed before its watchdog knew of the folder) cannot
         import shutil
 
-        shutil.rmtree(scratch, ignore_errors=True)     # (the runner would have removed it)
-        raise SystemExit(0) from None
-    if forkers > 1:
-        dispatcher.serve()
-    else:
-        server.serve()
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _tell(sock: socket.socket, message: dict) -> bool:
+    """Send ``message`` to the runner; False when it has gone."""
+    try:
+        send(sock, message)
+    except OSError:
+        return False
+    return True

@@ -12,7 +12,8 @@ idle), ``--halt-on-failure`` (a job handed ahead would start before the failure 
 ``--post-run`` (the next job would start while the last one's hooks still run) hold no more than
 their slots.
 
-The command line may launch the server before it knows the batch (:func:`start_early`), so that the
+The command line may launch the server before it knows the batch
+(:func:`~executor.batch.builtin_runner.start_early`), so that the
 server's imports and preload overlap its own; the worker then adopts that server for its first job when
 it was launched as the worker would start one (its slots and mark), and closes it otherwise.
 
@@ -28,44 +29,21 @@ after the failure that should have stopped them) and not for a ``worker`` (other
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
-from dataclasses import dataclass
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for, spare_cores
+from executor.batch.builtin_runner import (
+    ForkServer,
+    ForkServerError,
+    fork_server_environment,
+    forkers_for,
+    spare_cores,
+)
 from executor.batch.job_run import StartOrder
 from executor.children.process import RUNNER_ENV
-from store.jobs import Batch, WorkerIdentity
+from store.jobs import Batch
 
 #: Jobs a single-host run claims in one transaction at least (more when it holds more than that).
 CLAIM_CHUNK = 16
-
-
-def fork_server_environment(runner_id: str) -> dict[str, str]:
-    """The fork server's environment: this process's, and the runner's mark (see the watchdog)."""
-    return {**os.environ, RUNNER_ENV: runner_id}
-
-
-@dataclass(frozen=True)
-class EarlyServer:
-    """A fork server launched before its batch was known, and the identity of the worker it is for (its
-    mark is in the server's environment, so that worker must be this one)."""
-
-    identity: WorkerIdentity
-    server: ForkServer
-
-
-def start_early(slots: int) -> EarlyServer | None:
-    """Launch the fork server a worker with ``slots`` would start, before the batch is known (see
-    :class:`HandOver`'s ``early``): the command line does it before it imports the store and reads the
-    inputs, so the server's imports and preload (0.15 s on the 2-core VM) go on meanwhile on another
-    core. None when it cannot be launched (the worker then starts one, and says why)."""
-    identity = WorkerIdentity.current()
-    try:
-        return EarlyServer(identity, ForkServer(fork_server_environment(identity.id), keep_spare=spare_cores(slots),
-                                                limit=slots, forkers=forkers_for(slots)).launch())
-    except ForkServerError:
-        return None
 
 
 class HandOver:
@@ -109,7 +87,14 @@ class HandOver:
             return self._new_server()
         if self.on_scratch is not None and early.scratch is not None:
             self.on_scratch(early.scratch)
-        return early.wait_ready()
+        try:
+            ready = early.wait_ready()
+        except ForkServerError:
+            ready = None                           # it ended while the command started: a new one says why
+        if ready is None or early.proc is None or early.proc.poll() is not None:
+            early.close()
+            return self._new_server()
+        return ready
 
     @property
     def server(self) -> ForkServer | None:

@@ -23,8 +23,8 @@ from coverage_engine.results.atomic import write_output, write_text_atomically
 from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
 from executor.batch.batch_outcome import BatchOutcome, batch_outcome
+from executor.batch.builtin_runner import EarlyServer
 from executor.batch.errors import BatchError, NothingToResume
-from executor.batch.hand_over import EarlyServer
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter

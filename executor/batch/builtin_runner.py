@@ -483,9 +483,10 @@ class EarlyServer:
 
 def start_early(slots: int) -> EarlyServer | None:
     """Launch the fork server a worker with ``slots`` would start, before the batch is known (see
-    :class:`~executor.batch.hand_over.HandOver`'s ``early``): the command line does it before it imports the store and reads the
-    inputs, so the server's imports and preload (0.15 s on the 2-core VM) go on meanwhile on another
-    core. None when it cannot be launched (the worker then starts one, and says why)."""
+    :class:`~executor.batch.hand_over.HandOver`'s ``early``): the command line does it before it
+    imports the store and reads the inputs, so the server's imports and preload (0.15 s on the 2-core
+    VM) go on meanwhile on another core. None when it cannot be launched (the worker then starts one,
+    and says why)."""
     identity = WorkerIdentity.current()
     try:
         return EarlyServer(identity, ForkServer(fork_server_environment(identity.id), keep_spare=spare_cores(slots),

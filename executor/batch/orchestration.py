@@ -227,7 +227,7 @@ def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
                total: int | None = None, done: int = 0,
                early: EarlyServer | None = None) -> tuple[WorkerSummary, int | None]:
     """Run a worker until it runs out of work or is interrupted; returns its summary and the signal
-    (``early``: a fork server launched for it before the batch was known, see ``hand_over.start_early``)."""
+    (``early``: a fork server launched for it before the batch was known, see ``builtin_runner.start_early``)."""
     worker = Worker(store, settings, reporter) if early is None else \
         Worker(store, settings, reporter, early.identity, early.server)
     reporter.begin(total, done)
@@ -263,7 +263,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
 
     With one slot the child's own output is shown as it runs, unless ``echo_children`` is False (the
     search loop, whose output is a line per round). ``early``: a fork server the command line launched
-    for this run before the batch was known (``hand_over.start_early``).
+    for this run before the batch was known (``builtin_runner.start_early``).
 
     A full disk stops the run like an interruption (the jobs it stopped stay resumable); the report of
     what finished is still attempted, and if it cannot be written either, the run says so instead of

@@ -13,12 +13,15 @@ from batch_fixtures import alive, child_command, cli_env, run_cli, start_cli, wr
 
 from executor.children.hooks import run_post_hooks
 
-#: A hook that records its pid in the folder it is given, then sleeps (ignoring SIGINT if asked).
+#: A hook that records its pid in the folder it is given, then sleeps (ignoring SIGINT if asked). The pid
+#: file appears whole (written aside, then renamed): a test that saw it empty once read it too early.
 HOOK = r'''
 import os, signal, sys, time
 if len(sys.argv) > 2:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-open(os.path.join(sys.argv[-1], "hook.pid"), "w").write(str(os.getpid()))
+aside = os.path.join(sys.argv[-1], "hook.pid.part")
+open(aside, "w").write(str(os.getpid()))
+os.replace(aside, os.path.join(sys.argv[-1], "hook.pid"))
 time.sleep(float(sys.argv[1]))
 '''
 

@@ -248,6 +248,23 @@ def check_tables(conn: Connection, shown: str) -> None:
 SCHEMA_TRIES = 4
 
 
+#: SQLSTATEs of a session the server ended: admin_shutdown, crash_shutdown, cannot_connect_now.
+_ENDED_STATES = frozenset({"57P01", "57P02", "57P03"})
+
+
+def _session_ended(exc: SQLAlchemyError, connected: bool) -> bool:
+    """Whether ``exc`` says the server ended the session (a restart, an administrator), so that a new
+    connection may work: SQLAlchemy's judgement once connected; else the server's SQLSTATE, which also
+    comes while connecting; or psycopg finding the session half-closed under the next statement
+    ("another command is already in progress": the server ends a session asynchronously, and a test
+    that ended one under the first transaction met it once on the 2-core VM)."""
+    if not isinstance(exc, DBAPIError):
+        return False
+    if connected and exc.connection_invalidated:
+        return True
+    return getattr(exc.orig, "sqlstate", None) in _ENDED_STATES or "another command is already in progress" in str(exc.orig)
+
+
 def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
     """Create missing tables (all, or just ``tables``) and refuse a store made by an incompatible version.
 
@@ -267,8 +284,7 @@ def ensure_schema(engine: Engine, tables: list[Table] | None = None) -> None:
         except StoreError:
             raise
         except SQLAlchemyError as exc:
-            lost = connected and isinstance(exc, DBAPIError) and exc.connection_invalidated
-            if lost and attempt + 1 < SCHEMA_TRIES:
+            if _session_ended(exc, connected) and attempt + 1 < SCHEMA_TRIES:
                 time.sleep(0.1 * 2 ** attempt)
                 continue
             raise StoreError(f"cannot use the store: {driver_error(exc, engine.url.render_as_string(hide_password=True))}"

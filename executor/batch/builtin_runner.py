@@ -162,6 +162,11 @@ class ForkServer:
         return self._alive
 
     @property
+    def setup(self) -> tuple[int, bool, int, str | None]:
+        """How it was (or is to be) started: limit, spare, forkers and the runner's mark."""
+        return self.limit, self.keep_spare, self.forkers, self.mark
+
+    @property
     def mark(self) -> str | None:
         """``RUNNER_ENV=<worker id>`` when the server's environment has it: every process it forks carries it."""
         runner = self.environment.get(RUNNER_ENV)
@@ -472,6 +477,15 @@ def fork_server_environment(runner_id: str) -> dict[str, str]:
     return {**os.environ, RUNNER_ENV: runner_id}
 
 
+def worker_fork_server(runner_id: str, slots: int, forkers: int | None = None,
+                       on_scratch: Callable[[str], None] | None = None) -> ForkServer:
+    """The fork server (not started yet) of the worker ``runner_id`` with ``slots``: its mark in the
+    environment, a spare when a core is left over, no more jobs at once than its slots, and as many
+    forkers as they call for (unless ``forkers`` says)."""
+    return ForkServer(fork_server_environment(runner_id), keep_spare=spare_cores(slots), limit=slots,
+                      forkers=forkers_for(slots) if forkers is None else forkers, on_scratch=on_scratch)
+
+
 @dataclass(frozen=True)
 class EarlyServer:
     """A fork server launched before its batch was known, and the identity of the worker it is for (its
@@ -489,7 +503,6 @@ def start_early(slots: int) -> EarlyServer | None:
     and says why)."""
     identity = WorkerIdentity.current()
     try:
-        return EarlyServer(identity, ForkServer(fork_server_environment(identity.id), keep_spare=spare_cores(slots),
-                                                limit=slots, forkers=forkers_for(slots)).launch())
+        return EarlyServer(identity, worker_fork_server(identity.id, slots).launch())
     except ForkServerError:
         return None

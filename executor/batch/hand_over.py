@@ -31,15 +31,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from executor.batch.builtin_runner import (
-    ForkServer,
-    ForkServerError,
-    fork_server_environment,
-    forkers_for,
-    spare_cores,
-)
+from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for, worker_fork_server
 from executor.batch.job_run import StartOrder
-from executor.children.process import RUNNER_ENV
 from store.jobs import Batch
 
 #: Jobs a single-host run claims in one transaction at least (more when it holds more than that).
@@ -75,14 +68,12 @@ class HandOver:
         return self._server
 
     def _new_server(self) -> ForkServer:
-        return ForkServer(fork_server_environment(self.runner_id), keep_spare=spare_cores(self.slots),
-                          limit=self.slots, forkers=self.forkers, on_scratch=self.on_scratch).start()
+        return worker_fork_server(self.runner_id, self.slots, self.forkers, self.on_scratch).start()
 
     def _adopt(self, early: ForkServer) -> ForkServer:
         """The server launched early, once ready, when it was launched as this worker would start one; else
         it is closed and a new one started."""
-        if (early.limit, early.keep_spare, early.forkers, early.environment.get(RUNNER_ENV)) != \
-                (self.slots, spare_cores(self.slots), self.forkers, self.runner_id):
+        if early.setup != worker_fork_server(self.runner_id, self.slots, self.forkers).setup:
             early.close()
             return self._new_server()
         if self.on_scratch is not None and early.scratch is not None:

@@ -97,6 +97,9 @@ _SCHEMA_LOCK_KEY = 0x5CE5C0DE
 #: Page size of a new SQLite store (an existing file keeps the one it was created with).
 PAGE_SIZE = 8192
 
+#: How long a SQLite connection waits for another's lock before "database is locked".
+BUSY_TIMEOUT_S = 30
+
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: object) -> None:  # pragma: no cover - trivial
     # pysqlite's own BEGIN handling is switched off; _sqlite_begin emits BEGIN IMMEDIATE instead.
@@ -107,11 +110,35 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: object) -> None:  # pragma: 
     # on 100,000 variants, a store a third smaller written in 0.6x the time. (16 KiB gained little
     # more for variants and cost the job queue a third of its rate: every commit writes whole pages.)
     cursor.execute(f"PRAGMA page_size={PAGE_SIZE}")
-    cursor.execute("PRAGMA journal_mode=WAL")
+    _switch_to_wal(cursor)
     cursor.execute("PRAGMA synchronous=NORMAL")
-    cursor.execute("PRAGMA busy_timeout=30000")
+    cursor.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_S * 1000}")
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.close()
+
+
+def _switch_to_wal(cursor: Any) -> None:  # pragma: no cover - trivial
+    """Put the file in WAL mode, waiting out other connections that switch it at the same moment.
+
+    On a new file several processes switching at once can meet SQLite's deadlock guard, which answers
+    SQLITE_BUSY at once without calling the busy handler (6 processes opening one new store: 65 of
+    1,800 connections failed so). The switch is tried again, a little later each time, for as long as
+    the busy timeout would have waited.
+    """
+    import sqlite3  # here: only SQLite engines connect through this
+
+    deadline = time.monotonic() + BUSY_TIMEOUT_S
+    pause = 0.005
+    while True:
+        try:
+            cursor.execute("PRAGMA journal_mode=WAL")
+            return
+        except sqlite3.OperationalError as exc:
+            busy = str(getattr(exc, "sqlite_errorname", "")).startswith("SQLITE_BUSY")
+            if not busy or time.monotonic() + pause > deadline:
+                raise
+        time.sleep(pause)
+        pause = min(pause * 2, 0.25)
 
 
 def _sqlite_begin(dbapi_connection: Any) -> None:  # pragma: no cover - trivial
@@ -128,7 +155,7 @@ def open_engine(url: str | None = None) -> Engine:
     url = store_url(url)
     try:
         if url.startswith("sqlite"):
-            engine = create_engine(url, connect_args={"timeout": 30})
+            engine = create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_S})
             event.listen(engine, "connect", _sqlite_pragmas)
             engine.dialect.do_begin = _sqlite_begin  # type: ignore[method-assign]
         else:

@@ -219,6 +219,30 @@ def test_a_forker_that_dies_ends_the_server_and_its_jobs(folder):
     kill_orphan(started[0])                  # the dead forker's job: the runner kills it on "gone" (ForkedRun)
 
 
+def test_a_server_killed_with_requests_unread_still_says_which_jobs_it_started(folder):
+    # Linux answers the first read after such a death with a reset, although the server's earlier
+    # replies are still queued: they must be read, or the started job's pid is lost and it runs on.
+    server = ForkServer(limit=2, keep_spare=False).start()
+    jobs = Jobs(server, folder)
+    started: list[int] = []
+    try:
+        jobs.submit(0, str(folder / "hang.osc"))
+        assert select.select([server.fileno()], [], [], 60)[0]   # "started" is queued, not read
+        os.kill(server.proc.pid, signal.SIGSTOP)
+        jobs.submit(1, str(folder / "hang.osc"))                  # left unread by the stopped server
+        os.kill(server.proc.pid, signal.SIGKILL)
+        server.proc.wait(timeout=30)
+        jobs.wait_for(2, seconds=30)
+        started = [pid for job, event, pid in jobs.replies if event == "started"]
+        assert [job for job, event, _pid in jobs.replies] == [0, 0, 1]
+        assert jobs.events("started") == [0] and jobs.events("gone") == [0, 1]
+        assert alive(started[0])             # its parent is gone: the runner kills it (ForkedRun, on "gone")
+    finally:
+        server.close()
+        for pid in started:
+            kill_orphan(pid)
+
+
 #: The batch CLI in a process that believes it has 16 cores (so -j 8 forks from two forkers).
 MANY_CORES = ("import sys; import executor.batch.builtin_runner as runner; runner.usable_cpus = lambda: 16; "
               "from cli.scenario_batch_execution import main; sys.argv[0] = 'scenario_batch_execution'; main()")

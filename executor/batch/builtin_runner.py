@@ -356,7 +356,7 @@ class ForkServer:
         """Receive and dispatch one reply (holding ``_receiving``); False when the server has ended (its
         jobs killed, its waiters failed). With ``socket.MSG_DONTWAIT``, :class:`BlockingIOError` when none came."""
         try:
-            message, _ = receive(sock, flags=flags)
+            message, _ = receive(sock, flags=flags, after_reset=True)
         except BlockingIOError:
             raise
         except OSError:

@@ -88,16 +88,28 @@ def send(sock: socket.socket, message: dict, fds: list[int] | None = None, flags
         sock.sendmsg([data], [], flags)
 
 
-def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0) -> tuple[dict | None, list[int]]:
-    """The next message (None when the other end closed, also when it closed with messages of ours
-    unread, which Linux reports as a reset) and the descriptors that came with it (``flags``:
-    ``socket.MSG_DONTWAIT`` raises :class:`BlockingIOError` when none is waiting)."""
+def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0, *,
+            after_reset: bool = False) -> tuple[dict | None, list[int]]:
+    """The next message (None when the other end closed) and the descriptors that came with it
+    (``flags``: ``socket.MSG_DONTWAIT`` raises :class:`BlockingIOError` when none is waiting).
+
+    When the other end closed with messages of ours unread, Linux reports a reset to the first read,
+    although what it sent before it closed is still queued (the reset is reported once). That is None
+    too, unless ``after_reset``: then the queued messages are read on, up to the end. The runner reads
+    its server's replies so: a server killed with requests unread had said which jobs it started, and
+    a job whose start is lost would outlive it unseen (its process id unknown).
+    """
     fds = array.array("i")
+    ancillary_size = socket.CMSG_SPACE(max_fds * fds.itemsize) if max_fds else 0
     try:
-        data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, socket.CMSG_SPACE(max_fds * fds.itemsize)
-                                                      if max_fds else 0, flags)
+        data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, ancillary_size, flags)
     except ConnectionResetError:
-        return None, []
+        if not after_reset:
+            return None, []
+        try:
+            data, ancillary, _flags, _addr = sock.recvmsg(MAX_MESSAGE, ancillary_size, flags)
+        except (ConnectionResetError, BlockingIOError):
+            return None, []
     for level, kind, payload in ancillary:
         if level == socket.SOL_SOCKET and kind == socket.SCM_RIGHTS:
             fds.frombytes(payload[:len(payload) - len(payload) % fds.itemsize])

@@ -143,7 +143,7 @@ def run_command(input_dirs: tuple[str, ...], recursive: bool, output_dir: str, s
     input_dir = input_dirs[0] if input_dirs else None
     _check_run_options(input_dir=input_dir, command=command, simulation=simulation, resume=resume,
                        rerun_failed=rerun_failed, only_new=only_new, enqueue_only=enqueue_only, post_run=post_run)
-    from executor.batch.builtin_runner import start_early
+    from executor.batch.worker_server import start_early
 
     # the built-in runner's fork server starts now, so that its imports and preload overlap ours (the store,
     # the inputs); the worker adopts it

@@ -13,8 +13,9 @@ from pathlib import Path
 
 from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
 
-from executor.batch.builtin_runner import ForkServer, fork_server_environment, start_early
+from executor.batch.builtin_runner import ForkServer
 from executor.batch.hand_over import HandOver
+from executor.batch.worker_server import fork_server_environment, start_early
 
 HANG = "import osc.helpers\n\nscenario hang{n}:\n    do serial:\n        wait elapsed(60s)\n        emit end\n"
 

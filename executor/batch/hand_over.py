@@ -13,7 +13,7 @@ idle), ``--halt-on-failure`` (a job handed ahead would start before the failure 
 their slots.
 
 The command line may launch the server before it knows the batch
-(:func:`~executor.batch.builtin_runner.start_early`), so that the
+(:func:`~executor.batch.worker_server.start_early`), so that the
 server's imports and preload overlap its own; the worker then adopts that server for its first job when
 it was launched as the worker would start one (its slots and mark), and closes it otherwise.
 
@@ -31,8 +31,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for, worker_fork_server
+from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for
 from executor.batch.job_run import StartOrder
+from executor.batch.worker_server import worker_fork_server
 from store.jobs import Batch
 
 #: Jobs a single-host run claims in one transaction at least (more when it holds more than that).

@@ -23,13 +23,13 @@ from coverage_engine.results.atomic import write_output, write_text_atomically
 from coverage_engine.results.files import DECLARED_FILE, RESULT_FILE
 from executor.batch import folder_history
 from executor.batch.batch_outcome import BatchOutcome, batch_outcome
-from executor.batch.builtin_runner import EarlyServer
 from executor.batch.errors import BatchError, NothingToResume
 from executor.batch.inputs import Shard, check_command, discover, job_specs, not_utf8
 from executor.batch.junit_merge import merged_report, variants_of
 from executor.batch.progress import Reporter
 from executor.batch.repeats import expand_specs
 from executor.batch.worker import Worker, WorkerSettings, WorkerSummary
+from executor.batch.worker_server import EarlyServer
 from executor.children.process import disk_full
 from store.jobs import Batch, BatchOptions, JobSpec
 from store.queue import DEFAULT_LEASE, QueueStore
@@ -227,7 +227,7 @@ def run_worker(store: QueueStore, settings: WorkerSettings, reporter: Reporter,
                total: int | None = None, done: int = 0,
                early: EarlyServer | None = None) -> tuple[WorkerSummary, int | None]:
     """Run a worker until it runs out of work or is interrupted; returns its summary and the signal
-    (``early``: a fork server launched for it before the batch was known, see ``builtin_runner.start_early``)."""
+    (``early``: a fork server launched for it before the batch was known, see ``worker_server.start_early``)."""
     worker = Worker(store, settings, reporter) if early is None else \
         Worker(store, settings, reporter, early.identity, early.server)
     reporter.begin(total, done)
@@ -263,7 +263,7 @@ def run_local(store: QueueStore, batch: Batch, slots: int, reporter: Reporter, *
 
     With one slot the child's own output is shown as it runs, unless ``echo_children`` is False (the
     search loop, whose output is a line per round). ``early``: a fork server the command line launched
-    for this run before the batch was known (``builtin_runner.start_early``).
+    for this run before the batch was known (``worker_server.start_early``).
 
     A full disk stops the run like an interruption (the jobs it stopped stay resumable); the report of
     what finished is still attempted, and if it cannot be written either, the run says so instead of

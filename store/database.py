@@ -134,7 +134,8 @@ def _switch_to_wal(cursor: Any) -> None:  # pragma: no cover - trivial
             cursor.execute("PRAGMA journal_mode=WAL")
             return
         except sqlite3.OperationalError as exc:
-            busy = str(getattr(exc, "sqlite_errorname", "")).startswith("SQLITE_BUSY")
+            name = getattr(exc, "sqlite_errorname", None)          # (Python 3.11 on; 3.10 has the message)
+            busy = name.startswith("SQLITE_BUSY") if name else str(exc).startswith("database is locked")
             if not busy or time.monotonic() + pause > deadline:
                 raise
         time.sleep(pause)

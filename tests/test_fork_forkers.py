@@ -42,6 +42,11 @@ def parent_of(pid: int) -> int:
         return int(handle.read().rsplit(")", 1)[1].split()[1])
 
 
+def state_of(pid: int) -> str:
+    with open(f"/proc/{pid}/stat") as handle:
+        return handle.read().rsplit(")", 1)[1].split()[0]
+
+
 def children_of(pid: int) -> list[int]:
     try:
         with open(f"/proc/{pid}/task/{pid}/children") as handle:
@@ -224,23 +229,69 @@ def test_a_server_killed_with_requests_unread_still_says_which_jobs_it_started(f
     # replies are still queued: they must be read, or the started job's pid is lost and it runs on.
     server = ForkServer(limit=2, keep_spare=False).start()
     jobs = Jobs(server, folder)
-    started: list[int] = []
     try:
         jobs.submit(0, str(folder / "hang.osc"))
         assert select.select([server.fileno()], [], [], 60)[0]   # "started" is queued, not read
+        assert server.proc is not None
         os.kill(server.proc.pid, signal.SIGSTOP)
+        deadline = time.monotonic() + 30
+        while state_of(server.proc.pid) != "T":                    # stopped, not inside a read
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
         jobs.submit(1, str(folder / "hang.osc"))                  # left unread by the stopped server
         os.kill(server.proc.pid, signal.SIGKILL)
         server.proc.wait(timeout=30)
         jobs.wait_for(2, seconds=30)
-        started = [pid for job, event, pid in jobs.replies if event == "started"]
         assert [job for job, event, _pid in jobs.replies] == [0, 0, 1]
         assert jobs.events("started") == [0] and jobs.events("gone") == [0, 1]
+        started = [pid for _job, event, pid in jobs.replies if event == "started"]
         assert alive(started[0])             # its parent is gone: the runner kills it (ForkedRun, on "gone")
     finally:
         server.close()
-        for pid in started:
-            kill_orphan(pid)
+        for _job, event, pid in jobs.replies:
+            if event == "started":
+                kill_orphan(int(pid))
+
+
+def test_a_server_killed_while_a_thread_waits_for_its_start_fails_that_start_and_kills_its_jobs(folder):
+    # The reader thread's path (a blocking read): the reset, then the end, neither may leave a waiter hanging.
+    server = ForkServer(limit=1, keep_spare=False).start()
+    root = str(folder / "out")
+
+    def spawn(job: int):
+        return server.spawn(["scenario_execution", str(folder / "hang.osc"), "--output-dir", f"{root}/j{job}"],
+                            cwd=str(folder), environment={}, log_path=f"{root}/j{job}/log.txt",
+                            log_folder=(root, os.path.realpath(root)))
+
+    failures: list[Exception] = []
+
+    def second() -> None:
+        try:
+            spawn(1)
+        except Exception as exc:  # noqa: BLE001 - recorded for the assertion
+            failures.append(exc)
+
+    first = None
+    try:
+        first = spawn(0)
+        assert first is not None and server.proc is not None
+        os.kill(server.proc.pid, signal.SIGSTOP)
+        waiter = threading.Thread(target=second)
+        waiter.start()
+        time.sleep(0.5)                                           # its request sent, unread
+        os.kill(server.proc.pid, signal.SIGKILL)
+        waiter.join(timeout=30)
+        assert not waiter.is_alive() and len(failures) == 1
+        assert "fork server ended" in str(failures[0])
+        assert first.wait(timeout=30) == -signal.SIGKILL
+        deadline = time.monotonic() + 10
+        while alive(first.pid):                                   # killed as its server ended
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+    finally:
+        server.close()
+        if first is not None:
+            kill_orphan(first.pid)
 
 
 #: The batch CLI in a process that believes it has 16 cores (so -j 8 forks from two forkers).

@@ -164,7 +164,7 @@ def test_many_processes_create_the_schema_at_once(store_url):
 
 def _open_at_the_barrier(url: str, barrier, failures) -> None:
     engine = open_engine(url)           # what QueueStore.open does, with its first connection at the barrier
-    barrier.wait()
+    barrier.wait(timeout=60)
     try:
         ensure_schema(engine, QUEUE_TABLES)
     except StoreError as exc:
@@ -183,11 +183,18 @@ def test_processes_opening_one_new_sqlite_store_at_the_same_moment_all_succeed(t
         (tmp_path / str(round_)).mkdir()
         url = sqlite_url(tmp_path / str(round_))
         barrier = context.Barrier(6)
-        procs = [context.Process(target=_open_at_the_barrier, args=(url, barrier, failures)) for _ in range(6)]
-        for proc in procs:
-            proc.start()
-        for proc in procs:
-            proc.join(timeout=120)
+        procs = [context.Process(target=_open_at_the_barrier, args=(url, barrier, failures), daemon=True)
+                 for _ in range(6)]
+        try:
+            for proc in procs:
+                proc.start()
+            deadline = time.monotonic() + 120
+            for proc in procs:
+                proc.join(timeout=max(0.0, deadline - time.monotonic()))
+        finally:
+            for proc in procs:
+                if proc.is_alive():
+                    proc.kill()
         assert [proc.exitcode for proc in procs] == [0] * 6
         assert failures.empty(), failures.get()
 

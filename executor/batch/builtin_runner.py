@@ -265,8 +265,12 @@ class ForkServer:
         process = ForkedProcess(pending.pid, stdout)
         with self._table_lock:
             early = self._early.pop(request_id, None)
-            if early is None:
+            gone = early is None and not self._alive    # the server ended right after it said "started"
+            if early is None and not gone:
                 self._running[request_id] = process
+        if gone:                                        # (its end killed only the jobs it knew of)
+            kill_orphan(process.pid, self.mark)
+            early = -signal.SIGKILL
         if early is not None:
             process._exited(early)
         return process

@@ -332,7 +332,8 @@ scenario job:
     logs = {}
     for job in ("job0", "job1", "job2"):
         one, other = (tmp_path / runner / job / "log.txt" for runner in ("builtin", "launched"))
-        assert one.is_file() and other.is_file(), (job, builtin.stdout + builtin.stderr, launched.stdout)
+        assert one.is_file() and other.is_file(), (job, sorted(os.listdir(tmp_path / "builtin")),
+                                                   builtin.stdout + builtin.stderr, launched.stdout)
         logs[job] = one.read_text()
         assert one.read_bytes() == other.read_bytes(), job
     assert "the scenario folder's calendar" in logs["job0"]          # its own module, not the library's

@@ -294,6 +294,34 @@ def test_a_server_killed_while_a_thread_waits_for_its_start_fails_that_start_and
             kill_orphan(first.pid)
 
 
+@pytest.mark.parametrize("keep_spare", [False, True], ids=["forked", "spare"])
+def test_a_job_ends_with_the_process_that_forked_it_even_unseen_by_the_runner(folder, keep_spare):
+    # The runner here never reads the server's end, so only the kernel can stop the job: a job forked
+    # a moment before its forker died, whose "started" never left, is in that place.
+    server = ForkServer(limit=1, keep_spare=keep_spare).start()
+    jobs = Jobs(server, folder)
+    pids: list[int] = []
+    try:
+        jobs.submit(0, str(folder / "hang.osc"))
+        deadline = time.monotonic() + 60
+        while not jobs.events("started"):
+            assert time.monotonic() < deadline, jobs.replies
+            select.select([server.fileno()], [], [], 0.2)
+            server.poll()
+        pids = [int(pid) for _job, event, pid in jobs.replies if event == "started"]
+        assert server.proc is not None and parent_of(pids[0]) == server.proc.pid
+        os.kill(server.proc.pid, signal.SIGKILL)
+        server.proc.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        while alive(pids[0]):
+            assert time.monotonic() < deadline, "the job outlived the process that forked it"
+            time.sleep(0.05)
+    finally:
+        server.close()
+        for pid in pids:
+            kill_orphan(pid)
+
+
 #: The batch CLI in a process that believes it has 16 cores (so -j 8 forks from two forkers).
 MANY_CORES = ("import sys; import executor.batch.builtin_runner as runner; runner.usable_cpus = lambda: 16; "
               "from cli.scenario_batch_execution import main; sys.argv[0] = 'scenario_batch_execution'; main()")

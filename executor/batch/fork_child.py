@@ -20,6 +20,39 @@ from typing import TextIO
 #: the spare warms up, reaches it (the probe must neither swallow nor die of them).
 HELD_BACK = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT}
 
+#: ``prctl``'s option that asks the kernel for a signal when the process's parent ends.
+_PR_SET_PDEATHSIG = 1
+
+
+def _load_prctl() -> Callable[..., int] | None:
+    """libc's ``prctl`` (Linux), loaded once in the server so that no forked child pays for ``ctypes``."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        import ctypes
+
+        return ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+
+
+_PRCTL = _load_prctl()
+
+
+def die_with_parent(parent: int) -> None:
+    """In a child just forked by ``parent`` (a forking process of the server): be killed when it ends.
+
+    The runner kills the jobs of a server that ended, but only those it knows the pid of: one forked
+    a moment before its forker was killed (before the forker could say ``started``) would run on
+    unseen. The kernel's parent-death signal leaves no such moment; a parent that ended before the
+    signal was asked for is seen by the child's new parent, and the child ends at once.
+    """
+    if _PRCTL is None:
+        return
+    _PRCTL(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    if os.getppid() != parent:
+        os._exit(1)
+
 
 def _fresh_stdio() -> None:
     """``sys.stdin/stdout/stderr`` on fds 0-2 as a new interpreter makes them (buffering and all):

@@ -50,7 +50,7 @@ import socket
 import sys
 from typing import TYPE_CHECKING
 
-from executor.batch.fork_child import HELD_BACK, run_child
+from executor.batch.fork_child import HELD_BACK, die_with_parent, run_child
 from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, fork_paired, open_log, receive, send
 
 if TYPE_CHECKING:
@@ -314,6 +314,7 @@ class _Server:
     def _spawn(self, request: dict, output_fd: int) -> None:
         pid = self._hand_to_spare(request, output_fd)
         if pid is None:
+            parent = os.getpid()
             try:
                 pid = os.fork()
             except OSError as exc:
@@ -322,6 +323,7 @@ class _Server:
                 self._done_with()
                 return
             if pid == 0:
+                die_with_parent(parent)
                 run_child(request, output_fd, self.close_in_child, self.command.run)
         os.close(output_fd)
         self.children[pid] = request["id"]
@@ -344,11 +346,13 @@ class _Server:
 
     def _new_spare(self) -> None:
         """Fork a spare child that warms itself up and waits for a job (see the module's doc)."""
+        parent = os.getpid()
         try:
             pid, sock = fork_paired()
         except OSError:
             return
         if pid == 0:
+            die_with_parent(parent)
             _run_spare(sock, self)
         self.spare = _Spare(pid, sock)
 

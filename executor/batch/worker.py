@@ -289,22 +289,8 @@ class Worker:
                 launcher = self.hand_over.launcher()
             except ForkServerError as exc:
                 problem = str(exc)
-        order = self.hand_over.order
-        environment = {RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)}
-        run: JobRun | LoopRun
-        turn = (order, order.take())
-        if problem is None and launcher is not None and folder_root is not None and not batch.options.post_run:
-            run = self._driven[job.id] = ForkedRun(job, batch, output_dir, scenario, launcher, self._events.put,
-                                                   cwd=self.settings.cwd, environment=environment,
-                                                   folder_root=folder_root, order=turn)
-        elif problem is None and batch.command and echo is None and not batch.options.post_run \
-                and self._spawning_allowed():
-            run = self._driven[job.id] = SpawnedRun(job, batch, output_dir, scenario, environment=environment,
-                                                    order=turn)
-        else:
-            run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
-                         environment=environment, launcher=launcher, made_folder=made_folder,
-                         folder_root=folder_root, order=turn)
+        run = self._new_run(job, batch, output_dir, scenario, launcher,
+                            folder_root, made_folder, startable=problem is None)
         self._runs[job.id] = run
         self._started += 1
         if problem is None:
@@ -322,6 +308,30 @@ class Worker:
         ended = time.time()
         self._events.put(Done(run, disk_full_result(output_dir, began, ended) if full_disk
                               else launch_failure(output_dir, began, ended, problem)))
+
+    def _new_run(self, job: Job, batch: Batch, output_dir: Path, scenario: str, launcher: ForkServer | None,
+                 folder_root: tuple[str, str] | None, made_folder: bool, *, startable: bool) -> JobRun | LoopRun:
+        """The attempt of a claimed job: driven by the loop when it can be (a built-in job forked by the
+        server, a launched command spawned), else in a thread of its own (``--post-run`` hooks, an echoed
+        output, or one that will not start: it ends with its launch failure)."""
+        echo = self.settings.echo if self.settings.slots == 1 else None
+        order = self.hand_over.order
+        environment = {RUNNER_ENV: self.identity.id, **attempt_environment(job, batch.options.repeat)}
+        turn = (order, order.take())
+        run: JobRun | LoopRun
+        if startable and launcher is not None and folder_root is not None and not batch.options.post_run:
+            run = self._driven[job.id] = ForkedRun(job, batch, output_dir, scenario, launcher, self._events.put,
+                                                   cwd=self.settings.cwd, environment=environment,
+                                                   folder_root=folder_root, order=turn)
+        elif startable and batch.command and echo is None and not batch.options.post_run \
+                and self._spawning_allowed():
+            run = self._driven[job.id] = SpawnedRun(job, batch, output_dir, scenario, environment=environment,
+                                                    order=turn)
+        else:
+            run = JobRun(job, batch, output_dir, scenario, self._events, cwd=self.settings.cwd, echo=echo,
+                         environment=environment, launcher=launcher, made_folder=made_folder,
+                         folder_root=folder_root, order=turn)
+        return run
 
     def _spawning_allowed(self) -> bool:
         """Whether launched commands run as :class:`SpawnedRun` here (posix_spawn and process descriptors, in our folder)."""

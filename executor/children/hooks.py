@@ -29,6 +29,15 @@ def split_hook(hook: str) -> list[str]:
     return argv
 
 
+def _announce(argv: Sequence[str], announce: Callable[[str], None] | None, log_path: Path | None) -> None:
+    """Say a hook's command line before it starts: to ``announce``, and into the log it writes to."""
+    if announce is not None:
+        announce(shlex.join(argv))
+    if log_path is not None:
+        with open(log_path, "ab") as log:
+            log.write(f"$ {shlex.join(argv)}\n".encode())
+
+
 def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Path | None = None,
                    cwd: str | None = None, timeout: float = HOOK_TIMEOUT, grace: float = HOOK_GRACE,
                    cancelled: Callable[[], bool] | None = None,
@@ -60,11 +69,7 @@ def run_post_hooks(hooks: Sequence[str], output_dir: str | Path, *, log_path: Pa
         except ValueError as exc:
             problem(f"post-run '{hook}': {exc}")
             continue
-        if announce is not None:
-            announce(shlex.join(argv))
-        if log_path is not None:
-            with open(log_path, "ab") as log:
-                log.write(f"$ {shlex.join(argv)}\n".encode())
+        _announce(argv, announce, log_path)
         child = ChildProcess(argv, None if log_path is None else str(log_path), cwd=cwd, timeout=timeout,
                              grace=grace, append=True, environment=environment)
         if track is not None:

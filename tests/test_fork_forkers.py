@@ -221,7 +221,12 @@ def test_a_forker_that_dies_ends_the_server_and_its_jobs(folder):
         assert time.monotonic() < deadline, "the job of the forker still alive outlived the server"
         time.sleep(0.05)
     assert not alive(jobs.parents[1])
-    kill_orphan(started[0])                  # the dead forker's job: the runner kills it on "gone" (ForkedRun)
+    try:
+        while alive(started[0]):             # the dead forker's job ended with it (and ForkedRun kills it on "gone")
+            assert time.monotonic() < deadline, "the job of the forker killed outlived it"
+            time.sleep(0.05)
+    finally:
+        kill_orphan(started[0])
 
 
 def test_a_server_killed_with_requests_unread_still_says_which_jobs_it_started(folder):
@@ -245,7 +250,10 @@ def test_a_server_killed_with_requests_unread_still_says_which_jobs_it_started(f
         assert [job for job, event, _pid in jobs.replies] == [0, 0, 1]
         assert jobs.events("started") == [0] and jobs.events("gone") == [0, 1]
         started = [pid for _job, event, pid in jobs.replies if event == "started"]
-        assert alive(started[0])             # its parent is gone: the runner kills it (ForkedRun, on "gone")
+        deadline = time.monotonic() + 10     # and it ended with its server (fork_child.die_with_parent)
+        while alive(started[0]):
+            assert time.monotonic() < deadline, "the job outlived its server"
+            time.sleep(0.05)
     finally:
         server.close()
         for _job, event, pid in jobs.replies:
@@ -320,6 +328,16 @@ def test_a_job_ends_with_the_process_that_forked_it_even_unseen_by_the_runner(fo
         server.close()
         for pid in pids:
             kill_orphan(pid)
+
+
+def test_the_parent_death_signal_leaves_no_module_to_the_jobs():
+    # A job imports ctypes as a launched process would (its own ctypes.py first), so the server's
+    # lookup of prctl must not leave ctypes loaded in what the jobs are forked from.
+    code = ("import sys; import executor.batch.fork_child as c; "
+            "print(c._PRCTL is not None, sorted(m for m in sys.modules if 'ctypes' in m or 'struct' in m))")
+    shown = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert shown[0] == "True"
+    assert "ctypes" not in " ".join(shown[1:])
 
 
 #: The batch CLI in a process that believes it has 16 cores (so -j 8 forks from two forkers).

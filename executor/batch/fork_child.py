@@ -25,15 +25,23 @@ _PR_SET_PDEATHSIG = 1
 
 
 def _load_prctl() -> Callable[..., int] | None:
-    """libc's ``prctl`` (Linux), loaded once in the server so that no forked child pays for ``ctypes``."""
+    """libc's ``prctl`` (Linux), loaded once in the server so that no forked child pays for ``ctypes``.
+
+    The modules the lookup imported are taken out of ``sys.modules`` again (the function keeps libc
+    loaded): a job must import them as a launched process would, a ``ctypes.py`` of its own included.
+    """
     if not sys.platform.startswith("linux"):
         return None
+    loaded = set(sys.modules)
     try:
         import ctypes
 
         return ctypes.CDLL(None, use_errno=True).prctl
     except (OSError, AttributeError):
         return None
+    finally:
+        for name in set(sys.modules) - loaded:
+            del sys.modules[name]
 
 
 _PRCTL = _load_prctl()

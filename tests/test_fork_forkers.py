@@ -47,6 +47,14 @@ def state_of(pid: int) -> str:
         return handle.read().rsplit(")", 1)[1].split()[0]
 
 
+def wait_gone(pid: int, why: str = "", seconds: float = 10) -> None:
+    """Wait until process ``pid`` has ended (a zombie counts as ended); fail with ``why`` after ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while alive(pid):
+        assert time.monotonic() < deadline, why
+        time.sleep(0.05)
+
+
 def children_of(pid: int) -> list[int]:
     try:
         with open(f"/proc/{pid}/task/{pid}/children") as handle:
@@ -82,6 +90,14 @@ class Jobs:
 
     def events(self, kind: str) -> list[int]:
         return [job for job, event, _pid in self.replies if event == kind]
+
+    def wait_for_starts(self, count: int, seconds: float = 60) -> None:
+        """Read replies until ``count`` requests have started."""
+        deadline = time.monotonic() + seconds
+        while len(self.events("started")) < count:
+            assert time.monotonic() < deadline, self.replies
+            select.select([self.server.fileno()], [], [], 0.2)
+            self.server.poll()
 
     def wait_for(self, done: int, seconds: float = 60) -> None:
         """Read replies until ``done`` requests have had their last word (or the server ended)."""
@@ -203,11 +219,7 @@ def test_a_forker_that_dies_ends_the_server_and_its_jobs(folder):
     try:
         jobs.submit(0, str(folder / "hang.osc"))
         jobs.submit(1, str(folder / "hang.osc"))
-        deadline = time.monotonic() + 60
-        while len(jobs.events("started")) < 2:
-            assert time.monotonic() < deadline, jobs.replies
-            select.select([server.fileno()], [], [], 0.2)
-            server.poll()
+        jobs.wait_for_starts(2)
         started = {job: pid for job, event, pid in jobs.replies if event == "started"}
         assert jobs.parents[0] != jobs.parents[1]               # one job on each forker
         os.kill(jobs.parents[0], signal.SIGKILL)
@@ -216,16 +228,11 @@ def test_a_forker_that_dies_ends_the_server_and_its_jobs(folder):
         assert not server.alive
     finally:
         server.close()
-    deadline = time.monotonic() + 10
-    while alive(started[1]):                                    # the other forker killed its job as it ended
-        assert time.monotonic() < deadline, "the job of the forker still alive outlived the server"
-        time.sleep(0.05)
+    # the other forker killed its job as it ended
+    wait_gone(started[1], "the job of the forker still alive outlived the server")
     assert not alive(jobs.parents[1])
-    deadline = time.monotonic() + 10
-    try:
-        while alive(started[0]):             # the dead forker's job ended with it (and ForkedRun kills it on "gone")
-            assert time.monotonic() < deadline, "the job of the forker killed outlived it"
-            time.sleep(0.05)
+    try:                                     # the dead forker's job ended with it (and ForkedRun kills it on "gone")
+        wait_gone(started[0], "the job of the forker killed outlived it")
     finally:
         kill_orphan(started[0])
 
@@ -251,10 +258,7 @@ def test_a_server_killed_with_requests_unread_still_says_which_jobs_it_started(f
         assert [job for job, event, _pid in jobs.replies] == [0, 0, 1]
         assert jobs.events("started") == [0] and jobs.events("gone") == [0, 1]
         started = [pid for _job, event, pid in jobs.replies if event == "started"]
-        deadline = time.monotonic() + 10     # and it ended with its server (fork_child.die_with_parent)
-        while alive(started[0]):
-            assert time.monotonic() < deadline, "the job outlived its server"
-            time.sleep(0.05)
+        wait_gone(started[0], "the job outlived its server")   # it ended with it (fork_child.die_with_parent)
     finally:
         server.close()
         for _job, event, pid in jobs.replies:
@@ -293,10 +297,7 @@ def test_a_server_killed_while_a_thread_waits_for_its_start_fails_that_start_and
         assert not waiter.is_alive() and len(failures) == 1
         assert isinstance(failures[0], ForkServerError), failures   # (sent before the end, or refused after it)
         assert first.wait(timeout=30) == -signal.SIGKILL
-        deadline = time.monotonic() + 10
-        while alive(first.pid):                                   # killed as its server ended
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+        wait_gone(first.pid)                                      # killed as its server ended
     finally:
         server.close()
         if first is not None:
@@ -312,19 +313,12 @@ def test_a_job_ends_with_the_process_that_forked_it_even_unseen_by_the_runner(fo
     pids: list[int] = []
     try:
         jobs.submit(0, str(folder / "hang.osc"))
-        deadline = time.monotonic() + 60
-        while not jobs.events("started"):
-            assert time.monotonic() < deadline, jobs.replies
-            select.select([server.fileno()], [], [], 0.2)
-            server.poll()
+        jobs.wait_for_starts(1)
         pids = [int(pid) for _job, event, pid in jobs.replies if event == "started"]
         assert server.proc is not None and parent_of(pids[0]) == server.proc.pid
         os.kill(server.proc.pid, signal.SIGKILL)
         server.proc.wait(timeout=30)
-        deadline = time.monotonic() + 10
-        while alive(pids[0]):
-            assert time.monotonic() < deadline, "the job outlived the process that forked it"
-            time.sleep(0.05)
+        wait_gone(pids[0], "the job outlived the process that forked it")
     finally:
         server.close()
         for pid in pids:

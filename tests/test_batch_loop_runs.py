@@ -2,12 +2,14 @@
 
 A launched command (SpawnedRun) is started with posix_spawn and its end read from its process descriptor;
 the loop here is the worker's own wait (Inbox.wait on the run's descriptor and its deadlines). The built-in
-kind (ForkedRun) is driven through the real CLI in test_batch_builtin.py.
+kind (ForkedRun) is driven through the real CLI in test_batch_builtin.py; here only what it makes of the
+server's replies.
 """
 
 from __future__ import annotations
 
 import os
+import subprocess
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
@@ -15,8 +17,10 @@ from pathlib import Path
 
 import pytest
 
+from executor.batch.forked_run import ForkedRun
 from executor.batch.inbox import Inbox
 from executor.batch.job_run import Done, Started
+from executor.batch.loop_run import MAX_LAG, moment
 from executor.batch.spawned_run import SpawnedRun, loop_can_spawn
 from store.jobs import Batch, BatchOptions, JobSpec, WorkerIdentity
 from store.queue import QueueStore
@@ -210,3 +214,46 @@ def test_a_forced_stop_cuts_the_groups_grace_short(store, tmp_path):
     assert driven.done[0].result.status is JobState.CANCELLED
     assert time.monotonic() - begun < 20            # not the 30 s grace
     assert living_members(run.pid) == []
+
+
+# ---------------------------------------------------------------------------- the server's stamps
+class _TestServer:
+    """What a ForkedRun asks of the fork server; the test gives the replies."""
+
+    mark = "SCENARIO_BATCH_RUNNER=test"
+
+    def submit(self, argv, **_request) -> str:
+        return "r1"
+
+    def withdraw(self, request_id: str) -> None:
+        pass
+
+
+def test_a_forked_jobs_times_and_timeout_are_the_servers_stamps_not_when_the_loop_read_them(store, tmp_path):
+    """The loop may read the server's replies a while after they were sent (it lets them gather while
+    jobs wait at the server): the job's start, end and timeout go by the moments the server stamped."""
+    spawned = _run(store, tmp_path, "true", timeout=5.0)
+    (tmp_path / "j0.sce").write_text("x")
+    run = ForkedRun(spawned.job, replace(spawned.batch, command=()), spawned.output_dir, spawned.scenario_path,
+                    _TestServer(), lambda _reply: None, cwd=None, environment={},
+                    folder_root=(str(tmp_path / "res"), str(tmp_path / "res")))
+    assert run.start() == []
+    ended = subprocess.Popen(["true"], start_new_session=True)     # a pid whose group is gone
+    ended.wait()
+    began = time.time() - 2.0
+    [started] = run.on_reply({"id": "r1", "event": "started", "pid": ended.pid, "at": began})
+    assert started.began == began and started.at == pytest.approx(time.monotonic() - 2.0, abs=0.5)
+    assert run.due() == pytest.approx(started.at + 5.0)          # the timeout counts from the stamped start
+    (spawned.output_dir / "test.xml").write_text('<testsuite><testcase name="t"/></testsuite>')
+    [done] = run.on_reply({"id": "r1", "event": "exited", "pid": ended.pid, "status": 0, "at": began + 1.5})
+    assert isinstance(done, Done) and done.result.status is JobState.PASSED
+    assert (done.result.started_at, done.result.finished_at) == (began, began + 1.5)
+
+
+def test_a_stamp_that_cannot_be_a_past_moment_counts_as_now():
+    wall, mono = time.time(), time.monotonic()
+    for stamp in (None, "12", True, float("nan"), wall + 30.0, wall - MAX_LAG - 5.0):
+        at, at_mono = moment(stamp)
+        assert at >= wall and at_mono >= mono, stamp
+    at, at_mono = moment(wall - 3.0)
+    assert at == wall - 3.0 and at_mono == pytest.approx(mono - 3.0, abs=0.5)

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from executor.batch.claim_pacing import FIRST_BACKOFF, ClaimPacer, StoreBackoff
-from executor.batch.hand_over import CLAIM_CHUNK, HandOver
+from executor.batch.hand_over import AHEAD_PER_SLOT, CLAIM_CHUNK, LINGER, HandOver
 from executor.batch.job_run import Done, JobRun, Started
 from executor.batch.leases import LeaseKeeper
 from executor.batch.progress import PlainReporter
@@ -237,7 +237,9 @@ def test_sweep_takes_back_the_jobs_of_a_dead_runner_on_this_host_at_once(store):
 def test_hand_over_holds_jobs_ahead_only_for_a_built_in_batch_of_the_single_host_run(store):
     built_in, launched = _batch(store, 1, command=()), _batch(store, 1)
     halting = _batch(store, 1, command=(), halt=True)
-    assert HandOver("w", 2, ahead_allowed=True).decide(built_in) == 4
+    assert AHEAD_PER_SLOT > 1
+    assert HandOver("w", 2, ahead_allowed=True).decide(built_in) == 2 + 2 * AHEAD_PER_SLOT
+    assert HandOver("w", 1, ahead_allowed=True, threaded=True).decide(built_in) == 2   # a thread waits per job
     assert HandOver("w", 2, ahead_allowed=True).decide(launched) == 2
     assert HandOver("w", 2, ahead_allowed=True).decide(halting) == 2
     assert HandOver("w", 2, ahead_allowed=False).decide(built_in) == 2
@@ -253,12 +255,34 @@ def test_hand_over_claims_a_chunk_only_in_a_single_host_batch_that_cannot_halt(s
         hand_over.decide(batch)
         return hand_over.claim_limit(free)
 
-    assert limit(HandOver("w", 2, ahead_allowed=True), built_in, 1) == CLAIM_CHUNK
+    assert limit(HandOver("w", 2, ahead_allowed=True), built_in, 1) == max(CLAIM_CHUNK, 2 + 2 * AHEAD_PER_SLOT)
     assert limit(HandOver("w", 2, ahead_allowed=True), launched, 2) == CLAIM_CHUNK
-    assert limit(HandOver("w", 40, ahead_allowed=True), built_in, 3) == 80       # all it holds, when more
+    assert limit(HandOver("w", 40, ahead_allowed=True), built_in, 3) == 40 * (1 + AHEAD_PER_SLOT)   # all it holds
     assert limit(HandOver("w", 2, ahead_allowed=True), halting, 1) == 1          # never past a failure
     assert limit(HandOver("w", 2, ahead_allowed=False), built_in, 2) == 2        # a worker leaves the rest
     assert HandOver("w", 2, ahead_allowed=True).claim_limit(2) == 2              # undecided: what is free
+
+
+def test_the_loop_lingers_only_while_the_jobs_waiting_at_the_server_keep_every_slot_busy(store):
+    """Replies may gather while the jobs held at the server would keep its slots busy for twice as long, at
+    the rate jobs started lately; never longer than LINGER, and not at all without jobs handed ahead."""
+    built_in, halting = _batch(store, 1, command=()), _batch(store, 1, command=(), halt=True)
+    ahead = HandOver("w", 2, ahead_allowed=True)
+    ahead.decide(built_in)
+    assert ahead.linger(16, 10.0) == 0.0                     # no start seen yet: no rate
+    for i in range(11):
+        ahead.started(10.0 + i * 0.01)                       # 100 starts a second
+    assert ahead.linger(16, 10.1) == LINGER                  # 16 waiting: 160 ms of work, more than enough
+    assert ahead.linger(4, 10.1) == pytest.approx(4 / (11 / 0.1) / 2)    # 4 of 110 a second: half their time
+    assert ahead.linger(1, 10.1) == 0.0                      # fewer than the slots: every reply counts
+    for i in range(40):
+        ahead.started(20.0 + i * 0.001)                      # 1,000 a second: only the latest starts count
+    assert ahead.linger(16, 20.04) == pytest.approx(16 / (32 / (20.04 - 20.008)) / 2)
+    held_back = HandOver("w", 2, ahead_allowed=True)
+    held_back.decide(halting)
+    for i in range(11):
+        held_back.started(10.0 + i * 0.01)
+    assert held_back.linger(16, 10.1) == 0.0                 # nothing handed ahead: read every reply at once
 
 
 def test_hand_over_starts_one_fork_server_and_again_after_it_ended(tmp_path, monkeypatch):

@@ -58,9 +58,9 @@ class ForkedRun(LoopRun):
         if self._finished:
             return []
         if event == "started":
-            return self._on_started(int(message["pid"]))
+            return self._on_started(int(message["pid"]), message.get("at"))
         if event == "exited":
-            return self._on_exited(os.waitstatus_to_exitcode(int(message["status"])))
+            return self._on_exited(os.waitstatus_to_exitcode(int(message["status"])), message.get("at"))
         if event == "withdrawn":
             return [self._not_started()]
         if event == "failed":

@@ -51,6 +51,23 @@ GROUP_POLL = 0.02
 
 Events = list[Started | Done]
 
+#: Longest delay between an event and its reading that a stamp may account for (seconds); a stamp
+#: further back (a clock set back meanwhile) counts from now.
+MAX_LAG = 60.0
+
+
+def moment(at: object) -> tuple[float, float]:
+    """``(time.time(), time.monotonic())`` of an event stamped ``at`` (wall time) by the process that saw
+    it, read now: the fork server's replies may wait a while before the worker's loop reads them.
+    Without a usable stamp, now."""
+    wall, mono = time.time(), time.monotonic()
+    if isinstance(at, bool) or not isinstance(at, (int, float)):
+        return wall, mono
+    lag = wall - at
+    if not 0.0 < lag <= MAX_LAG:
+        return wall, mono
+    return at, mono - lag
+
 
 class LoopRun:
     """One attempt the worker's loop drives (see the module doc); subclasses start the child.
@@ -112,16 +129,17 @@ class LoopRun:
             self.order[0].done(self.order[1])
 
     # ------------------------------------------------------------------ the child's life
-    def _on_started(self, pid: int) -> Events:
+    def _on_started(self, pid: int, at: object = None) -> Events:
+        """The child started (at wall time ``at``, when whoever started it said)."""
         self.pid = pid
-        self._started_at = time.time()
-        self._started_mono = time.monotonic()
+        self._started_at, self._started_mono = moment(at)
         if self._cancel_grace is not None:         # the cancel came before the start: stop it now
             self._signal_stop(self._cancel_grace)
         return [Started(self, pid, self._started_mono, self._started_at)]
 
-    def _on_exited(self, returncode: int) -> Events:
-        self._ended = (returncode, time.time())
+    def _on_exited(self, returncode: int, at: object = None) -> Events:
+        """The child ended (at wall time ``at``, when whoever reaped it said)."""
+        self._ended = (returncode, moment(at)[0])
         return self.tick(time.monotonic())
 
     def due(self) -> float | None:

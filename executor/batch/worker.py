@@ -93,7 +93,8 @@ class Worker:
         self.leases = LeaseKeeper(store, self.identity, lease=settings.lease, max_lost=settings.max_lost,
                                   batch_id=settings.batch_id)
         self.hand_over = HandOver(self.identity.id, settings.slots, ahead_allowed=settings.hand_over_ahead
-                                  and settings.batch_id is not None, forkers=settings.forkers, early=early)
+                                  and settings.batch_id is not None, forkers=settings.forkers, early=early,
+                                  threaded=settings.slots == 1 and settings.echo is not None)
         self.recorder = ResultRecorder(store, reporter, self.backoff, RecorderHooks(
             stop=self.stop, requeued=self.pacer.wake, halted=lambda _batch: self.pacer.idle(),
             stopping=self._stop_is_set), self.summary,
@@ -409,9 +410,17 @@ class Worker:
         deadline = self._driven_due()
         if deadline is not None:                  # a timeout, a grace, a signalled group to watch
             timeout = max(0.0, min(timeout, deadline - now))
+        pause = min(timeout, self.hand_over.linger(self._waiting_at_server(), now)) if timeout else 0.0
+        if pause:                                 # the server starts the next jobs itself: let its replies
+            self._events.wait(pause)              # gather (see hand_over), only the job threads heard
+            timeout = max(0.0, timeout - (time.monotonic() - now))
         self._events.wait(timeout, self._watched())
         for event in self._events.take():
             self._add(event)
+
+    def _waiting_at_server(self) -> int:
+        """The jobs handed to the fork server that have not started yet."""
+        return sum(1 for run in self._driven.values() if run.pid is None and isinstance(run, ForkedRun))
 
     def _watched(self) -> dict[int, Callable[[], object]]:
         """What the loop waits on besides its inbox: the fork server's replies, the launched children's ends."""
@@ -456,6 +465,8 @@ class Worker:
                 self._add(made)
             return
         job = event.run.job
+        if isinstance(event, Started):
+            self.hand_over.started(event.at)
         if isinstance(event, Started) or job.id not in self._shown_running:
             self._shown_running.add(job.id)
             self.reporter.job_started(job)

@@ -100,14 +100,14 @@ class QueueReads:
         with self._tx() as conn:
             return conn.execute(select(jobs.c.scenario_text).where(jobs.c.id == job_id)).scalar()
 
-    def mean_duration(self, batch_id: int | None = None, *, shared_only: bool = False) -> float | None:
-        """Mean wall time of the jobs that have a verdict (for an ETA), or None before the first."""
-        stmt = select(func.avg(jobs.c.duration)).where(jobs.c.finished_at.is_not(None),
-                                                       jobs.c.duration.is_not(None))
-        stmt = self._scope(stmt, batch_id, shared_only)
+    def recent_ends(self, batch_id: int, since: float) -> tuple[int, float | None]:
+        """How many of the batch's jobs ended at ``since`` or later, and the earliest start among them
+        (None when none did): the batch's recent throughput, for an ETA."""
+        stmt = select(func.count(), func.min(jobs.c.started_at)).where(
+            jobs.c.batch_id == batch_id, jobs.c.finished_at >= since)
         with self._tx() as conn:
-            value = conn.execute(stmt).scalar()
-        return None if value is None else float(value)
+            count, first = conn.execute(stmt).one()
+        return int(count), None if first is None else float(first)
 
     @staticmethod
     def _scope(stmt: Select[Any], batch_id: int | None, shared_only: bool) -> Select[Any]:

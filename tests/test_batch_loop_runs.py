@@ -21,7 +21,9 @@ from executor.batch.forked_run import ForkedRun
 from executor.batch.inbox import Inbox
 from executor.batch.job_run import Done, Started
 from executor.batch.loop_run import MAX_LAG, moment
+from executor.batch.progress import PlainReporter
 from executor.batch.spawned_run import SpawnedRun, loop_can_spawn
+from executor.batch.worker import Worker, WorkerSettings
 from store.jobs import Batch, BatchOptions, JobSpec, WorkerIdentity
 from store.queue import QueueStore
 from store.states import NOT_STARTED_REASON, JobState
@@ -240,20 +242,36 @@ def test_a_forked_jobs_times_and_timeout_are_the_servers_stamps_not_when_the_loo
     assert run.start() == []
     ended = subprocess.Popen(["true"], start_new_session=True)     # a pid whose group is gone
     ended.wait()
-    began = time.time() - 2.0
+    began = time.monotonic() - 2.0
     [started] = run.on_reply({"id": "r1", "event": "started", "pid": ended.pid, "at": began})
-    assert started.began == began and started.at == pytest.approx(time.monotonic() - 2.0, abs=0.5)
-    assert run.due() == pytest.approx(started.at + 5.0)          # the timeout counts from the stamped start
+    assert started.at == began and started.began == pytest.approx(time.time() - 2.0, abs=0.5)
+    assert run.due() == began + 5.0                              # the timeout counts from the stamped start
     (spawned.output_dir / "test.xml").write_text('<testsuite><testcase name="t"/></testsuite>')
     [done] = run.on_reply({"id": "r1", "event": "exited", "pid": ended.pid, "status": 0, "at": began + 1.5})
     assert isinstance(done, Done) and done.result.status is JobState.PASSED
-    assert (done.result.started_at, done.result.finished_at) == (began, began + 1.5)
+    assert done.result.started_at == started.began
+    assert done.result.finished_at - done.result.started_at == pytest.approx(1.5, abs=0.05)
+
+
+def test_a_stop_withdraws_the_jobs_waiting_at_the_server_next_to_start_first_then_stops_the_newest(store, tmp_path):
+    """Between two withdraws a slot may free: the server then starts the oldest job still waiting. So the
+    waiting jobs are taken back oldest first, before any running one is stopped (whose slot would take one)."""
+    batch = store.create_batch(mode="local", input_dir=str(tmp_path), output_dir=str(tmp_path / "res"), host="h",
+                               command=(), options=BatchOptions(),
+                               specs=[JobSpec(f"j{i}", str(tmp_path / f"j{i}.sce"), "0" * 64, "x") for i in range(5)])
+    worker = Worker(store, WorkerSettings(slots=2, batch_id=batch.id, watchdog=False), PlainReporter())
+    jobs = store.claim(worker.identity, limit=5, batch_id=batch.id)
+    runs = [ForkedRun(job, batch, tmp_path / "res" / job.name, job.scenario_path, _TestServer(), lambda _reply: None,
+                      cwd=None, environment={}, folder_root=(str(tmp_path), str(tmp_path))) for job in jobs]
+    runs[0].pid, runs[1].pid = 101, 102                          # running; j2, j3, j4 wait at the server
+    worker._runs = {run.job.id: run for run in runs}
+    assert [run.job.name for run in worker._stopping_order()] == ["j2", "j3", "j4", "j1", "j0"]
 
 
 def test_a_stamp_that_cannot_be_a_past_moment_counts_as_now():
     wall, mono = time.time(), time.monotonic()
-    for stamp in (None, "12", True, float("nan"), wall + 30.0, wall - MAX_LAG - 5.0):
-        at, at_mono = moment(stamp)
-        assert at >= wall and at_mono >= mono, stamp
-    at, at_mono = moment(wall - 3.0)
-    assert at == wall - 3.0 and at_mono == pytest.approx(mono - 3.0, abs=0.5)
+    for stamp in (None, "12", True, float("nan"), mono + 30.0, mono - MAX_LAG - 5.0):
+        at_wall, at = moment(stamp)
+        assert at_wall >= wall and at >= mono, stamp
+    at_wall, at = moment(mono - 3.0)
+    assert at == mono - 3.0 and at_wall == pytest.approx(wall - 3.0, abs=0.5)

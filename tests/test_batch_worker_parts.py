@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from executor.batch.claim_pacing import FIRST_BACKOFF, ClaimPacer, StoreBackoff
-from executor.batch.hand_over import AHEAD_PER_SLOT, CLAIM_CHUNK, LINGER, HandOver
+from executor.batch.hand_over import AHEAD_PER_SLOT, CLAIM_CHUNK, LINGER, REPLY_ROOM, HandOver
 from executor.batch.job_run import Done, JobRun, Started
 from executor.batch.leases import LeaseKeeper
 from executor.batch.progress import PlainReporter
@@ -278,6 +278,12 @@ def test_the_loop_lingers_only_while_the_jobs_waiting_at_the_server_keep_every_s
     for i in range(40):
         ahead.started(20.0 + i * 0.001)                      # 1,000 a second: only the latest starts count
     assert ahead.linger(16, 20.04) == pytest.approx(16 / (32 / (20.04 - 20.008)) / 2)
+    many = HandOver("w", 64, ahead_allowed=True)
+    many.decide(built_in)
+    for i in range(32):
+        many.started(30.0 + i / 5000)                        # 5,000 a second: the socket would fill first
+    rate = 32 / (30.0064 - 30.0)
+    assert REPLY_ROOM / 2 / rate < LINGER and many.linger(512, 30.0064) == pytest.approx(REPLY_ROOM / 2 / rate)
     held_back = HandOver("w", 2, ahead_allowed=True)
     held_back.decide(halting)
     for i in range(11):

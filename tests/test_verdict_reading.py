@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import os
 
-from coverage_engine.results.files import COVERAGE_FILE, RESULT_FILE
-from executor.batch.verdict import NOT_WRITTEN, FileMark, read_coverage, read_result
+from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
+from executor.batch.verdict import NOT_WRITTEN, FileMark, judge, read_coverage, read_result
+from executor.children.process import ProcessOutcome
+from store.states import JobState
 
 PASSED = '<testsuite><testcase name="t"/></testsuite>'
 
@@ -80,3 +82,18 @@ def test_an_earlier_log_is_kept_and_a_folder_that_cannot_be_looked_at_is_not_tak
     assert kept == tmp_path / "log.1.txt" and kept.read_text() == "first" and not (tmp_path / "log.txt").exists()
     with pytest.raises(OSError):                                 # ENAMETOOLONG: not "no log there"
         rotate_log(Path(tmp_path) / ("x" * 300), 2)
+
+
+def test_the_log_tail_is_kept_with_a_verdict_that_is_shown_and_not_read_for_a_pass(tmp_path):
+    """The tail goes where a job that did not pass is shown (the merged report, the failure list): a
+    passing job's log is not read at all (one file less per job for the batch process)."""
+    (tmp_path / LOG_FILE).write_text("last words\n")
+    mark = FileMark.of(str(tmp_path / RESULT_FILE))
+    (tmp_path / RESULT_FILE).write_text(PASSED)
+    passed = judge(ProcessOutcome(0, 1.0, 2.0), tmp_path, mark)
+    assert passed.status is JobState.PASSED and passed.log_tail is None
+    erred = judge(ProcessOutcome(3, 1.0, 2.0), tmp_path, mark)
+    assert erred.status is JobState.ERROR and erred.log_tail == "last words\n"
+    (tmp_path / RESULT_FILE).write_text(PASSED.replace("/>", "><failure message='no'/></testcase>"))
+    failed = judge(ProcessOutcome(0, 1.0, 2.0), tmp_path, mark)
+    assert failed.status is JobState.FAILED and failed.log_tail == "last words\n"

@@ -29,7 +29,8 @@ JSON with the job's output file descriptor attached, or naming the job's log (``
 and its output root (``folder``), so the server makes the job's folder and opens its log when the
 job starts (the runner's process then does no file-system work per job); the server answers ``started`` (the child's pid)
 or ``failed`` (why not), and ``exited`` with the raw wait status when the child ends, both stamped with
-the moment (``at``, ``time.time``: the runner may read them later, see :mod:`executor.batch.hand_over`). The server
+the moment (``at``, ``time.monotonic``, one clock for every process of the host: the runner may read
+them later, see :mod:`executor.batch.hand_over`). The server
 reaps its children and ends when the runner closes its end (it died or is done): it then kills
 the process groups of the children still running, so no job outlives its runner.
 
@@ -329,7 +330,7 @@ class _Server:
                 run_child(request, output_fd, self.close_in_child, self.command.run)
         os.close(output_fd)
         self.children[pid] = request["id"]
-        send(self.sock, {"id": request["id"], "event": "started", "pid": pid, "at": time.time()})
+        send(self.sock, {"id": request["id"], "event": "started", "pid": pid, "at": time.monotonic()})
         if self.keep_spare and self.spare is None:
             self._new_spare()
 
@@ -388,7 +389,7 @@ class _Server:
                 continue
             job = self.children.pop(pid, None)
             if job is not None:
-                ended = time.time()
+                ended = time.monotonic()
                 self._start_waiting()          # the slot's next job first, then the news
                 send(self.sock, {"id": job, "event": "exited", "pid": pid, "status": status, "at": ended})
                 self._done_with()

@@ -4,7 +4,8 @@
 with as many forking processes as its slots call for (:func:`~executor.batch.builtin_runner.forkers_for`),
 numbers the jobs so that they reach it in claim order (:class:`~executor.batch.job_run.StartOrder`),
 and says how many jobs the worker holds: its slots, and in a single-host batch of the built-in
-runner as many again, handed to the fork server ahead. The server keeps each until a slot is free
+runner :data:`AHEAD_PER_SLOT` more per slot (one per slot where every job has a thread of its own:
+``-j 1`` showing the output as it runs), handed to the fork server ahead. The server keeps each until a slot is free
 and starts it the moment a job ends, so no slot waits while the worker records a result and claims
 the next job (measured, 1,000 trivial jobs at -j 2: 1.36 slots busy on average without). Launched
 commands, a ``worker`` (jobs it holds ahead would wait behind its busy slots while other hosts
@@ -22,10 +23,13 @@ enough jobs to keep every slot busy, the loop lets them gather for up to :data:`
 all at one wake-up (:meth:`HandOver.linger`). On a shared 2-core VM each wake-up of the batch process
 cost about as much as one job's own work (caches and the scheduler, not our code: the same judging ran
 four times faster in a tight loop), so the server is handed :data:`AHEAD_PER_SLOT` jobs per slot ahead,
-enough for the gathering not to leave a slot idle (measured, 2,000 trivial jobs at -j 2: 1.23-1.41 ms of
-the batch process's CPU per job without, 0.84-1.16 ms with; the wall time no longer). The server stamps
-each start and end with its time, so a job's times and its ``--timeout`` do not depend on when the loop
-read them.
+enough for the gathering not to leave a slot idle (measured side by side, 2,000 trivial jobs at -j 2:
+1.23-1.46 ms of the batch process's CPU per job before, 0.87-1.08 ms after; the wall time no longer).
+The server stamps each start and end with its clock (``time.monotonic``), so a job's times and its
+``--timeout`` do not depend on when the loop read them. The gathering is bounded by the socket too
+(:data:`REPLY_ROOM`): the server never waits to send a reply. The depth is bounded because the
+store cannot tell a job held ahead from one started: after a ``kill -9`` each job the runner held
+counts a lost attempt when ``--resume`` takes it back (and one lost three times ends as an error).
 
 A single-host batch also claims in chunks (:meth:`HandOver.claim_limit`): at least
 :data:`CLAIM_CHUNK` jobs per claim, held by the worker (claimed, not started) until a slot frees, so
@@ -60,6 +64,10 @@ LINGER = 0.05
 
 #: Recent starts the rate of starts is taken over (for :meth:`HandOver.linger`).
 RATE_WINDOW = 32
+
+#: Replies of the server that may gather unread (a start and an end per job): well within what the
+#: socket holds (about 270 of them with Linux's default buffer), so the server never waits to send one.
+REPLY_ROOM = 128
 
 
 class HandOver:
@@ -153,11 +161,12 @@ class HandOver:
     def linger(self, queued: int, now: float) -> float:
         """Seconds the worker's loop may leave the server's replies unread, ``queued`` jobs waiting there
         for a slot: none unless jobs are handed over ahead and those waiting keep every slot busy for twice
-        as long at the rate jobs started lately (at most :data:`LINGER`)."""
+        as long at the rate jobs started lately; at most :data:`LINGER`, and no longer than it takes
+        :data:`REPLY_ROOM` replies to come at that rate."""
         if not self._ahead or queued < self.slots or len(self._starts) < 2:
             return 0.0
         span = now - self._starts[0]
         if span <= 0.0:
             return 0.0
         rate = len(self._starts) / span            # starts per second, lately
-        return min(LINGER, queued / rate / 2.0)
+        return min(LINGER, queued / rate / 2.0, REPLY_ROOM / 2.0 / rate)

@@ -52,21 +52,22 @@ GROUP_POLL = 0.02
 Events = list[Started | Done]
 
 #: Longest delay between an event and its reading that a stamp may account for (seconds); a stamp
-#: further back (a clock set back meanwhile) counts from now.
+#: further back, or ahead of now, counts as now.
 MAX_LAG = 60.0
 
 
 def moment(at: object) -> tuple[float, float]:
-    """``(time.time(), time.monotonic())`` of an event stamped ``at`` (wall time) by the process that saw
-    it, read now: the fork server's replies may wait a while before the worker's loop reads them.
-    Without a usable stamp, now."""
+    """``(time.time(), time.monotonic())`` of an event that the process that saw it stamped ``at``
+    (``time.monotonic``: one clock for every process of the host, which a change of the wall clock does
+    not move), read now: the fork server's replies may wait a while before the worker's loop reads
+    them. Without a usable stamp, now."""
     wall, mono = time.time(), time.monotonic()
     if isinstance(at, bool) or not isinstance(at, (int, float)):
         return wall, mono
-    lag = wall - at
+    lag = mono - at
     if not 0.0 < lag <= MAX_LAG:
         return wall, mono
-    return at, mono - lag
+    return wall - lag, at
 
 
 class LoopRun:
@@ -130,7 +131,7 @@ class LoopRun:
 
     # ------------------------------------------------------------------ the child's life
     def _on_started(self, pid: int, at: object = None) -> Events:
-        """The child started (at wall time ``at``, when whoever started it said)."""
+        """The child started (at ``at``, ``time.monotonic``, when whoever started it said so)."""
         self.pid = pid
         self._started_at, self._started_mono = moment(at)
         if self._cancel_grace is not None:         # the cancel came before the start: stop it now
@@ -138,7 +139,7 @@ class LoopRun:
         return [Started(self, pid, self._started_mono, self._started_at)]
 
     def _on_exited(self, returncode: int, at: object = None) -> Events:
-        """The child ended (at wall time ``at``, when whoever reaped it said)."""
+        """The child ended (at ``at``, ``time.monotonic``, when whoever reaped it said so)."""
         self._ended = (returncode, moment(at)[0])
         return self.tick(time.monotonic())
 

@@ -30,18 +30,30 @@ class StatusSnapshot:
         return sum(self.counts.values())
 
 
-def snapshot(store: QueueStore, batch: Batch) -> StatusSnapshot:
-    """Read counts, running jobs and the mean job time of ``batch`` and estimate the time left."""
+#: Seconds of recent ends the ETA goes by (the batch's pace now, not over its whole life).
+ETA_WINDOW = 60.0
+
+
+def snapshot(store: QueueStore, batch: Batch, now: float | None = None) -> StatusSnapshot:
+    """Read counts and running jobs of ``batch`` and estimate the time left from its recent pace."""
     counts = store.counts(batch.id)
     running = Counter((j.worker_host or "?", j.worker_id or "?") for j in store.running(batch.id))
     remaining = counts[JobState.QUEUED] + counts[JobState.RUNNING]
-    mean = store.mean_duration(batch.id)
-    eta = None
-    if remaining == 0:
-        eta = 0.0
-    elif mean is not None and running:
-        eta = remaining * mean / max(1, sum(running.values()))
-    return StatusSnapshot(batch, counts, dict(running), eta)
+    return StatusSnapshot(batch, counts, dict(running), 0.0 if remaining == 0 else
+                          eta(store, batch.id, remaining, time.time() if now is None else now))
+
+
+def eta(store: QueueStore, batch_id: int, remaining: int, now: float) -> float | None:
+    """Seconds until ``remaining`` jobs have ended, at the pace jobs ended in the last :data:`ETA_WINDOW`
+    seconds (None when none did: stopped, or not begun). The pace, not the jobs in state ``running`` and
+    their mean time: a single-host run holds more jobs than it runs at once (the next ones for each
+    slot), so those would promise an end many times too early."""
+    since = now - ETA_WINDOW
+    ended, first_start = store.recent_ends(batch_id, since)
+    if ended == 0 or first_start is None:
+        return None
+    window = now - max(since, first_start)
+    return remaining * window / ended if window > 0 else None
 
 
 def _eta_text(seconds: float | None) -> str:

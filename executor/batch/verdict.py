@@ -182,7 +182,8 @@ def read_coverage(path: str | os.PathLike[str], mark: FileMark) -> str | None:
 def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: FileMark, *,
           ignore_return_value: bool = False, timeout: float | None = None,
           coverage_mark: FileMark | None = None) -> JobResult:
-    """The result of one attempt, ready to be written to the store (with its coverage.json, if any)."""
+    """The result of one attempt, ready to be written to the store (with its coverage.json, if any, and
+    its log's tail where the verdict is shown with it: not for a pass, whose log is not read)."""
     folder = os.fspath(output_dir)
     xml_text, cases, unreadable = read_result(os.path.join(folder, RESULT_FILE), mark)
     rc = outcome.returncode
@@ -207,7 +208,7 @@ def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: Fil
     log = os.path.join(folder, LOG_FILE)
     return JobResult(status=status, exit_code=rc, started_at=outcome.started_at,
                      finished_at=outcome.finished_at, reason=reason, junit_xml=xml_text,
-                     log_tail=log_tail(log), output_dir=folder, log_path=log,
+                     log_tail=None if status is JobState.PASSED else log_tail(log), output_dir=folder, log_path=log,
                      coverage_json=None if coverage_mark is None else read_coverage(
                          os.path.join(folder, COVERAGE_FILE), coverage_mark))
 

@@ -387,15 +387,20 @@ class Worker:
             job_ids = [job.id for job in self._waiting]
             self._waiting.clear()
             self._give_back(job_ids)
-        # newest first: the jobs handed to the fork server ahead are withdrawn before the running
-        # ones are stopped, so none of them starts in the slot a stopped job leaves
         if self._force.is_set():
-            for run in reversed(list(self._runs.values())):
+            for run in self._stopping_order():
                 run.cancel(grace=0)
         elif not self._cancelling:
             self._cancelling = True
-            for run in reversed(list(self._runs.values())):
+            for run in self._stopping_order():
                 run.cancel()
+
+    def _stopping_order(self) -> list[JobRun | LoopRun]:
+        """The jobs handed to the fork server ahead first, the next to start first, then the others newest
+        first: none of those waiting starts in a slot that frees meanwhile or that a stopped job leaves."""
+        runs = list(self._runs.values())
+        ahead = [run for run in runs if isinstance(run, ForkedRun) and run.pid is None]
+        return ahead + [run for run in reversed(runs) if not (isinstance(run, ForkedRun) and run.pid is None)]
 
     # ------------------------------------------------------------------ events
     def _wait_for_event(self) -> None:

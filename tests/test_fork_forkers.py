@@ -9,6 +9,7 @@ is left when the runner closes, or when a forker dies. Then a whole batch throug
 
 from __future__ import annotations
 
+import json
 import os
 import select
 import signal
@@ -28,7 +29,7 @@ from tests_schema import assert_valid
 
 from executor.batch.builtin_runner import SLOTS_PER_FORKER, ForkServer, ForkServerError, forkers_for
 from executor.batch.fork_dispatch import Dispatcher, Forker
-from executor.batch.fork_protocol import receive
+from executor.batch.fork_protocol import MAX_MESSAGE, bundles, receive
 from executor.children.process import kill_orphan
 
 BIN = Path(sys.executable).parent
@@ -72,13 +73,13 @@ class Jobs:
         self.parents: dict[int, int] = {}                       # job -> the process that forked it
         self.requests: dict[int, str] = {}
 
-    def submit(self, job: int, scenario: str) -> None:
+    def submit(self, job: int, scenario: str, later: bool = False) -> None:
         out = self.folder / "out" / f"j{job}"
         root = str(self.folder / "out")
         self.requests[job] = self.server.submit(
             ["scenario_execution", scenario, "--output-dir", str(out)], cwd=str(self.folder), environment={},
             log_path=str(out / "log.txt"), append=False, log_folder=(root, os.path.realpath(root)),
-            reply=lambda message: self._heard(job, message))
+            reply=lambda message: self._heard(job, message), later=later)
 
     def _heard(self, job: int, message: dict) -> None:
         self.replies.append((job, str(message.get("event")), message.get("pid")))
@@ -127,6 +128,40 @@ def test_forkers_follow_the_slots_and_the_cores(monkeypatch):
     assert [forkers_for(n) for n in (1, SLOTS_PER_FORKER, SLOTS_PER_FORKER + 1, 16, 64)] == [1, 1, 2, 4, 4]
     monkeypatch.setattr(runner, "usable_cpus", lambda: 2)
     assert [forkers_for(n) for n in (1, 8, 64)] == [1, 1, 1]       # few cores: the jobs are the bottleneck
+
+
+def test_requests_kept_to_go_together_fit_in_as_few_messages_as_the_size_allows_in_their_order():
+    requests = [json.dumps({"id": str(i), "log": "x" * 2000}).encode() for i in range(100)]
+    messages = bundles(requests)
+    assert bundles(requests[:1]) == requests[:1]                  # one alone goes as it is
+    assert all(len(message) <= MAX_MESSAGE for message in messages)
+    assert [len(json.loads(message)["requests"]) for message in messages] == [32, 32, 32, 4]   # 2 KB each
+    ids = [request["id"] for message in messages for request in json.loads(message)["requests"]]
+    assert ids == [str(i) for i in range(100)]
+
+
+@pytest.mark.parametrize("forkers", [1, 2])
+def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their_order(folder, forkers):
+    """Kept requests reach the server only with send_submitted (or before a request sent at once); one
+    withdrawn before is answered here and never reaches the server; the others start in their order."""
+    server = ForkServer(limit=1, forkers=forkers).start()
+    jobs = Jobs(server, folder)
+    quick = str(folder / "quick.osc")
+    try:
+        for job in range(3):
+            jobs.submit(job, quick, later=True)
+        jobs.submit(3, quick, later=True)
+        server.withdraw(jobs.requests[3])
+        assert jobs.replies == [(3, "withdrawn", None)]
+        assert not select.select([server.fileno()], [], [], 1.0)[0]   # nothing sent, nothing started
+        server.send_submitted()
+        jobs.submit(4, quick, later=True)
+        jobs.submit(5, quick)                                      # at once: the kept one goes first
+        jobs.wait_for(6)
+    finally:
+        server.close()
+    assert jobs.events("started") == [0, 1, 2, 4, 5] and jobs.events("exited") == [0, 1, 2, 4, 5]
+    assert not (folder / "out" / "j3").exists()
 
 
 def test_two_forkers_share_the_slots_and_a_waiting_job_waits_for_one(folder):

@@ -20,6 +20,7 @@ server forks the next job's process ahead and lets it copy them on our own probe
 from __future__ import annotations
 
 import itertools
+import json
 import os
 import select
 import shutil
@@ -32,7 +33,8 @@ import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
-from executor.batch.fork_protocol import command_target, receive, send
+from executor.batch.fork_protocol import bundles, command_target, receive, send
+from executor.batch.forked_process import ForkedProcess, Pending
 from executor.children.process import RUNNER_ENV, StartTicket, kill_orphan
 
 #: The command a built-in job runs (what ``-- scenario_execution {SCENARIO} --output-dir {OUTPUT_DIR}`` says).
@@ -89,41 +91,6 @@ def start_failure(reason: str | None, errno: int | None = None, folder: bool = F
     return ForkServerError(message) if errno is None else ForkServerError(errno, message)
 
 
-class ForkedProcess:
-    """A job forked by the server, with the subset of ``subprocess.Popen`` that ChildProcess uses."""
-
-    def __init__(self, pid: int, stdout: BinaryIO | None = None) -> None:
-        self.pid = pid
-        self.stdout = stdout
-        self.returncode: int | None = None
-        self._done = threading.Event()
-
-    def _exited(self, returncode: int) -> None:
-        self.returncode = returncode
-        self._done.set()
-
-    def poll(self) -> int | None:
-        return self.returncode
-
-    def wait(self, timeout: float | None = None) -> int:
-        if not self._done.wait(timeout):
-            raise subprocess.TimeoutExpired(str(self.pid), timeout or 0)
-        assert self.returncode is not None
-        return self.returncode
-
-
-class _Pending:
-    """A spawn request waiting for the server's answer."""
-
-    def __init__(self) -> None:
-        self.event = threading.Event()
-        self.pid: int | None = None
-        self.reason: str | None = None
-        self.errno: int | None = None              # why the server could not start it, as an OSError's
-        self.folder_refused = False                # … because the job's folder could not be made
-        self.withdrawn = False
-
-
 class ForkServer:
     """The worker's handle on its fork server: start it, spawn jobs, stop it.
 
@@ -145,10 +112,11 @@ class ForkServer:
         self._sock: socket.socket | None = None
         self._lock = threading.Lock()              # one request on the socket at a time
         self._table_lock = threading.Lock()
-        self._pending: dict[str, _Pending] = {}
+        self._pending: dict[str, Pending] = {}
         self._running: dict[str, ForkedProcess] = {}
         self._early: dict[str, int] = {}           # exits that came before the spawner took its process
         self._replies: dict[str, Callable[[dict], None]] = {}   # submitted requests: who hears of them
+        self._outbox: dict[str, bytes] = {}        # requests submitted to be sent later (see send_submitted)
         self._receiving = threading.Lock()         # one reader of the replies at a time, each dispatched in order
         self._reader: threading.Thread | None = None   # reads the replies once a thread waits in spawn()
         self._ids = itertools.count(1)
@@ -237,7 +205,7 @@ class ForkServer:
         waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
         self._ensure_reader()
         request_id = str(next(self._ids))
-        pending = _Pending()
+        pending = Pending()
         with self._table_lock:
             self._pending[request_id] = pending
         with self._lock:
@@ -251,9 +219,12 @@ class ForkServer:
             if output_fd is None:
                 request.update(log=log_path, append=append, folder=log_folder)
             try:
+                self._send_kept()                          # those submitted before it go first
                 self._send(request, None if output_fd is None else [output_fd])
-            except OSError as exc:
+            except OSError as exc:                         # (a ForkServerError too)
                 self._forget(request_id)
+                if isinstance(exc, ForkServerError):
+                    raise
                 raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
         if ticket is not None:
             ticket.sent()
@@ -276,16 +247,18 @@ class ForkServer:
         return process
 
     def submit(self, argv: Sequence[str], *, cwd: str | None, environment: Mapping[str, str], log_path: str,
-               append: bool, log_folder: tuple[str, str] | None, reply: Callable[[dict], None]) -> str:
+               append: bool, log_folder: tuple[str, str] | None, reply: Callable[[dict], None],
+               later: bool = False) -> str:
         """Send a spawn request without waiting for its start (the worker's own loop, no thread per job);
-        returns the request's id (for :meth:`withdraw`).
+        returns the request's id (for :meth:`withdraw`). ``later``: keep it for :meth:`send_submitted`,
+        which sends those kept in one message (the requests reach the server in the order submitted).
 
         ``reply`` is called by whoever reads the replies (the worker's loop through :meth:`poll`, or the
         reader thread once a thread waits in :meth:`spawn`) with each of the server's messages on the
         request, in order: ``started`` (``pid``), ``failed`` (``reason``, ``errno``, ``folder``) or ``withdrawn``, then
         ``exited`` (the raw wait ``status``); ``{"event": "gone"}`` when the server ended before it could
         say more (a job it had started was killed with it). :class:`ForkServerError` when the request
-        cannot be sent."""
+        cannot be sent (the server ended before)."""
         request_id = str(next(self._ids))
         with self._table_lock:
             self._replies[request_id] = reply
@@ -295,20 +268,50 @@ class ForkServer:
             try:
                 if not self._alive or self._sock is None:
                     raise ForkServerError("the built-in runner's fork server has ended")
-                try:
-                    self._send(request)
-                except OSError as exc:
-                    raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+                self._outbox[request_id] = json.dumps(request).encode()
+                if not later:
+                    self._send_kept()
             except ForkServerError:
                 with self._table_lock:
                     self._replies.pop(request_id, None)
                 raise
         return request_id
 
+    def send_submitted(self) -> None:
+        """Send the requests :meth:`submit` kept (``later``): one wake-up of the server for all of them.
+        Should the server be gone, its end answers them (``gone``, see :meth:`_ended`)."""
+        with self._lock:
+            try:
+                self._send_kept()
+            except ForkServerError:
+                pass
+
+    def _send_kept(self) -> None:
+        """Send the kept requests (holding ``_lock``); :class:`ForkServerError` when the server is gone
+        (those not sent stay until its end answers them)."""
+        while self._outbox and self._alive and self._sock is not None:
+            kept = list(self._outbox.values())
+            self._outbox.clear()
+            try:
+                for message in bundles(kept):
+                    self._send(message)
+            except ForkServerError:
+                raise
+            except OSError as exc:
+                raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+
     def withdraw(self, request_id: str) -> None:
         """Take back a submitted request that still waits for a slot (answered ``withdrawn``, or
         ``started`` when it had begun: stop that one as any other)."""
-        self._withdraw(request_id)
+        with self._lock:
+            kept = self._outbox.pop(request_id, None) is not None
+        if not kept:
+            self._withdraw(request_id)
+            return
+        with self._table_lock:                 # never sent: answered here
+            reply = self._replies.pop(request_id, None)
+        if reply is not None:
+            reply({"id": request_id, "event": "withdrawn"})
 
     def _forget(self, request_id: str) -> None:
         with self._table_lock:
@@ -324,7 +327,7 @@ class ForkServer:
             except OSError:
                 pass                 # the server is gone: the reader fails every pending request
 
-    def _send(self, message: dict, fds: list[int] | None = None) -> None:
+    def _send(self, message: dict | bytes, fds: list[int] | None = None) -> None:
         """Send one message (holding ``_lock``) without ever blocking on a full socket while nobody reads the
         replies: the server, blocked on its own full socket, would never read ours (with thousands of
         jobs in flight). When there is no room, the replies that came are read first."""

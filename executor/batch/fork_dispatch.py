@@ -105,6 +105,9 @@ class Dispatcher:
                 return False
             if "withdraw" in message:
                 self._withdraw(str(message["withdraw"]))
+            elif "requests" in message:                  # several at once, none with a descriptor
+                for request in message["requests"]:
+                    self.waiting[str(request.get("id"))] = (request, [])
             else:
                 self.waiting[str(message.get("id"))] = (message, fds)
 

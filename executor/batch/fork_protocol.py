@@ -78,14 +78,43 @@ def fork_paired() -> tuple[int, socket.socket]:
     return pid, mine
 
 
-def send(sock: socket.socket, message: dict, fds: list[int] | None = None, flags: int = 0) -> None:
-    """One JSON message, with file descriptors attached when given (``flags``: ``socket.MSG_DONTWAIT``
-    raises :class:`BlockingIOError` instead of waiting for room; a message is sent whole or not at all)."""
-    data = json.dumps(message).encode()
+def send(sock: socket.socket, message: dict | bytes, fds: list[int] | None = None, flags: int = 0) -> None:
+    """One JSON message (or one already encoded), with file descriptors attached when given (``flags``:
+    ``socket.MSG_DONTWAIT`` raises :class:`BlockingIOError` instead of waiting for room; a message is
+    sent whole or not at all)."""
+    data = message if isinstance(message, bytes) else json.dumps(message).encode()
     if fds:
         sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, array.array("i", fds))], flags)
     else:
         sock.sendmsg([data], [], flags)
+
+
+def bundles(requests: list[bytes]) -> list[bytes]:
+    """Encoded requests (no descriptors attached) as few messages as :data:`MAX_MESSAGE` allows:
+    ``{"requests": [...]}``, or the request itself when it goes alone. One message wakes the server
+    once for all of them (sending each woke it each time: measured on 2 cores, a ``sendmsg`` cost the
+    runner 60 us, its reading 4 us). One request is far below that size (its paths are bounded by
+    the system's 4 KiB each)."""
+    messages: list[bytes] = []
+    group: list[bytes] = []
+    size = 0
+    for request in requests:
+        if group and size + len(request) + 1 > MAX_MESSAGE - len(_BUNDLE_FRAME):
+            messages.append(_bundle(group))
+            group, size = [], 0
+        group.append(request)
+        size += len(request) + 1
+    if group:
+        messages.append(_bundle(group))
+    return messages
+
+
+#: What a bundle adds around its requests.
+_BUNDLE_FRAME = b'{"requests": []}'
+
+
+def _bundle(group: list[bytes]) -> bytes:
+    return group[0] if len(group) == 1 else b'{"requests": [' + b",".join(group) + b"]}"
 
 
 def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0, *,

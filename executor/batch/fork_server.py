@@ -25,7 +25,8 @@ modules are imported by the child that needs them, and die with it, so a job tha
 changes global state or hangs cannot touch the next one.
 
 Protocol (a Unix socket pair, one message per ``sendmsg``): the runner sends ``spawn`` requests as
-JSON with the job's output file descriptor attached, or naming the job's log (``log``, ``append``)
+JSON (several in one message as ``requests`` where none carries a descriptor) with the job's output
+file descriptor attached, or naming the job's log (``log``, ``append``)
 and its output root (``folder``), so the server makes the job's folder and opens its log when the
 job starts (the runner's process then does no file-system work per job); the server answers ``started`` (the child's pid)
 or ``failed`` (why not), and ``exited`` with the raw wait status when the child ends, both stamped with
@@ -250,6 +251,9 @@ class _Server:
                 return False
             if "withdraw" in message:
                 self._withdraw(str(message["withdraw"]))
+            elif "requests" in message:                  # several at once (fork_protocol.bundles)
+                for request in message["requests"]:
+                    self._request(request, [])
             else:
                 self._request(message, fds)
             if not select.select([self.requests.fileno()], [], [], 0)[0]:

@@ -1,6 +1,7 @@
 """A built-in job the worker's loop drives: its child forked by the fork server (see :mod:`executor.batch.loop_run`).
 
-The request goes out with :meth:`ForkServer.submit <executor.batch.builtin_runner.ForkServer.submit>`;
+The request goes out with :meth:`ForkServer.submit <executor.batch.builtin_runner.ForkServer.submit>`
+(kept until the worker has started what it can, then sent with the others in one message);
 the server makes the job's folder and opens its log as the job starts, and tells of the start and
 the end. Its replies are read by the worker's loop and reach the run as :class:`Reply` events.
 """
@@ -45,7 +46,7 @@ class ForkedRun(LoopRun):
     def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
         self._request = self.server.submit(argv, cwd=self.cwd, environment=environment,
                                            log_path=os.path.join(os.path.abspath(self.output_dir), LOG_FILE), append=False,
-                                           log_folder=self.folder_root, reply=self._reply)
+                                           log_folder=self.folder_root, reply=self._reply, later=True)
         return []
 
     def _reply(self, message: dict) -> None:

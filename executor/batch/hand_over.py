@@ -122,6 +122,11 @@ class HandOver:
             return self._new_server()
         return ready
 
+    def send_submitted(self) -> None:
+        """Send the fork server the requests submitted to go together (see :meth:`ForkServer.submit`)."""
+        if self._server is not None:
+            self._server.send_submitted()
+
     @property
     def server(self) -> ForkServer | None:
         """The fork server while one runs (the worker's loop reads its replies), else None."""

@@ -233,14 +233,18 @@ class Worker:
         self._start_waiting()
 
     def _start_waiting(self) -> None:
-        """Start claimed jobs while a slot is free (claim order); one the store could not prepare waits on."""
-        while self._waiting and len(self._runs) < self.hand_over.holding():
-            job = self._waiting.popleft()
-            try:
-                self._start(job)
-            except BaseException:
-                self._waiting.appendleft(job)
-                raise
+        """Start claimed jobs while a slot is free (claim order); one the store could not prepare waits on.
+        The fork server hears of the built-in ones at the end, all in one message."""
+        try:
+            while self._waiting and len(self._runs) < self.hand_over.holding():
+                job = self._waiting.popleft()
+                try:
+                    self._start(job)
+                except BaseException:
+                    self._waiting.appendleft(job)
+                    raise
+        finally:
+            self.hand_over.send_submitted()
 
     def _give_back(self, job_ids: list[int]) -> None:
         """Release claimed jobs that will not be started here (if the store is unreachable, the next heartbeat does)."""

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from executor.batch.inputs import Shard
     from executor.batch.orchestration import BatchRequest, LocalRun
     from executor.output.folder_lock import FolderLock
-    from store.jobs import Batch
+    from store.jobs import Batch, Job
     from store.queue import QueueStore
 
 PROG = "scenario_batch_execution"
@@ -243,7 +243,7 @@ def _report_run(store: QueueStore, batch: Batch, ran: LocalRun, shard: Shard | N
 
     counts, signum = ran.counts, ran.signum
     report: str | None = os.path.join(batch.output_dir, RESULT_FILE)
-    _print_failures(store, batch)
+    _print_failures(store, batch, ran.outcome.listed if ran.outcome is not None else None)
     if ran.outcome is not None:
         from executor.batch.batch_outcome import flaky_lines
 
@@ -420,12 +420,12 @@ def _flaky_records(store: QueueStore, batch: Batch) -> list[VariantRecord]:
     return [record for record in records.values() if record.flaky]
 
 
-def _print_failures(store: QueueStore, batch: Batch) -> None:
+def _print_failures(store: QueueStore, batch: Batch, listed: Sequence[Job] | None = None) -> None:
     """The failures grouped by kind (the triage), then the short summary of the jobs of the folder whose
-    latest verdict is not a pass (nothing when all passed)."""
+    latest verdict is not a pass (nothing when all passed); ``listed``: the folder's latest jobs, when known."""
     from executor.batch.failure_summary import not_passed_in_folder, summary_lines, triage
 
-    items = not_passed_in_folder(store, batch)
+    items = not_passed_in_folder(store, batch, listed)
     for text in triage(store, items) + summary_lines(items):
         click.echo(text)
 

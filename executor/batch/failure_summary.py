@@ -11,11 +11,11 @@ escaped, so a file named with terminal escapes cannot clear or rewrite the scree
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from coverage_engine.results.files import LOG_FILE
-from executor.batch.folder_history import latest_jobs
+from executor.batch.folder_history import latest_jobs_where
 from executor.batch.junit_merge import child_cases, job_cases, job_names, variants_of
 from executor.output.terminal import printable
 from store.jobs import Batch, Job
@@ -71,10 +71,12 @@ def not_passed_in_store(store: QueueStore, batch_id: int) -> list[NotPassed]:
     return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
 
 
-def not_passed_in_folder(store: QueueStore, batch: Batch) -> list[NotPassed]:
+def not_passed_in_folder(store: QueueStore, batch: Batch, listed: Sequence[Job] | None = None) -> list[NotPassed]:
     """The jobs of the batch's folder whose latest verdict is not a pass: those of the batch, and for a
-    rerun or top-up also those of the batches it continues (what the folder's test.xml holds)."""
-    jobs = [job for job in latest_jobs(store, batch) if job.status is not JobState.PASSED]
+    rerun or top-up also those of the batches it continues (what the folder's test.xml holds); only
+    those are read with their reports. ``listed``: the folder's latest jobs without their results, when
+    at hand (:attr:`BatchOutcome.listed <executor.batch.batch_outcome.BatchOutcome.listed>`)."""
+    jobs = list(latest_jobs_where(store, batch, lambda job: job.status is not JobState.PASSED, listed))
     return not_passed(jobs, variants_of(store.engine, [job.scenario_path for job in jobs]))
 
 

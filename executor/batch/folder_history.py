@@ -53,6 +53,16 @@ def latest_jobs(store: QueueStore, batch: Batch, *, results: bool = True) -> Ite
             for job in store.results_by_id([each.id for each in light[start:start + _CHUNK]]))
 
 
+def latest_jobs_where(store: QueueStore, batch: Batch, keep: Callable[[Job], bool],
+                      listed: Sequence[Job] | None = None) -> Iterator[Job]:
+    """The jobs of :func:`latest_jobs` that ``keep`` accepts (judged without their results), with their
+    results: only those are read with their reports. ``listed``: :func:`latest_jobs` without results,
+    when the caller has it already."""
+    light = list(latest_jobs(store, batch, results=False)) if listed is None else listed
+    ids = [job.id for job in light if keep(job)]
+    return (job for start in range(0, len(ids), _CHUNK) for job in store.results_by_id(ids[start:start + _CHUNK]))
+
+
 def latest_of(batches: Iterable[Iterable[T]], name: Callable[[T], str], finished: Callable[[T], bool]) -> list[T]:
     """Of the jobs of ``batches`` (oldest batch first), the latest of each name: a later one replaces an
     earlier one only when it is ``finished``; the order is that in which the names first appeared."""

@@ -72,6 +72,7 @@ class Jobs:
         self.replies: list[tuple[int, str, int | None]] = []    # (job, event, pid)
         self.parents: dict[int, int] = {}                       # job -> the process that forked it
         self.requests: dict[int, str] = {}
+        self.messages: list[dict] = []                          # the replies themselves
 
     def submit(self, job: int, scenario: str, later: bool = False) -> None:
         out = self.folder / "out" / f"j{job}"
@@ -83,6 +84,7 @@ class Jobs:
 
     def _heard(self, job: int, message: dict) -> None:
         self.replies.append((job, str(message.get("event")), message.get("pid")))
+        self.messages.append(message)
         if message.get("event") == "started":
             try:
                 self.parents[job] = parent_of(int(message["pid"]))
@@ -133,11 +135,13 @@ def test_forkers_follow_the_slots_and_the_cores(monkeypatch):
 def test_requests_kept_to_go_together_fit_in_as_few_messages_as_the_size_allows_in_their_order():
     requests = [json.dumps({"id": str(i), "log": "x" * 2000}).encode() for i in range(100)]
     messages = bundles(requests)
-    assert bundles(requests[:1]) == requests[:1]                  # one alone goes as it is
-    assert all(len(message) <= MAX_MESSAGE for message in messages)
-    assert [len(json.loads(message)["requests"]) for message in messages] == [32, 32, 32, 4]   # 2 KB each
-    ids = [request["id"] for message in messages for request in json.loads(message)["requests"]]
+    assert bundles(requests[:1]) == [(1, requests[0])]             # one alone goes as it is
+    assert all(len(message) <= MAX_MESSAGE for _count, message in messages)
+    assert [count for count, _message in messages] == [32, 32, 32, 4]   # 2 KB each
+    assert [len(json.loads(message)["requests"]) for _count, message in messages] == [32, 32, 32, 4]
+    ids = [request["id"] for _count, message in messages for request in json.loads(message)["requests"]]
     assert ids == [str(i) for i in range(100)]
+    assert [count for count, _message in bundles(requests, 16 * 1024)] == [8] * 12 + [4]
 
 
 @pytest.mark.parametrize("forkers", [1, 2])
@@ -162,6 +166,27 @@ def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their
         server.close()
     assert jobs.events("started") == [0, 1, 2, 4, 5] and jobs.events("exited") == [0, 1, 2, 4, 5]
     assert not (folder / "out" / "j3").exists()
+
+
+def test_kept_requests_the_socket_refuses_are_answered_as_failed_while_the_server_lives_on(folder):
+    """A message larger than the socket's send buffer is refused (EMSGSIZE) and the server never hears of
+    those requests: each is answered here (``failed``), none waits for good, and the server serves on."""
+    server = ForkServer(limit=1).start()
+    jobs = Jobs(server, folder)
+    try:
+        server._sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)   # smaller than when it started
+        long_name = folder / ("q" * 200 + ".osc")
+        long_name.write_text(QUICK)
+        for job in range(30):
+            jobs.submit(job, str(long_name), later=True)
+        server.send_submitted()
+        assert sorted(jobs.events("failed")) == list(range(30)) and server.alive
+        assert "could not be sent" in str(next(m for m in jobs.messages if m.get("event") == "failed")["reason"])
+        jobs.submit(30, str(folder / "quick.osc"))                # one alone fits: it runs
+        jobs.wait_for(31)
+    finally:
+        server.close()
+    assert jobs.events("started") == [30] and jobs.events("exited") == [30]
 
 
 def test_two_forkers_share_the_slots_and_a_waiting_job_waits_for_one(folder):

@@ -33,7 +33,7 @@ import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import BinaryIO
 
-from executor.batch.fork_protocol import bundles, command_target, receive, send
+from executor.batch.fork_protocol import MAX_MESSAGE, bundles, command_target, receive, send
 from executor.batch.forked_process import ForkedProcess, Pending
 from executor.children.process import RUNNER_ENV, StartTicket, kill_orphan
 
@@ -117,6 +117,7 @@ class ForkServer:
         self._early: dict[str, int] = {}           # exits that came before the spawner took its process
         self._replies: dict[str, Callable[[dict], None]] = {}   # submitted requests: who hears of them
         self._outbox: dict[str, bytes] = {}        # requests submitted to be sent later (see send_submitted)
+        self._bundle_limit = MAX_MESSAGE           # the largest message the socket takes (see wait_ready)
         self._receiving = threading.Lock()         # one reader of the replies at a time, each dispatched in order
         self._reader: threading.Thread | None = None   # reads the replies once a thread waits in spawn()
         self._ids = itertools.count(1)
@@ -191,6 +192,8 @@ class ForkServer:
             self._end_process()
             raise ForkServerError(f"the built-in runner cannot start: {reason}")
         mine.settimeout(None)
+        # a Unix datagram socket refuses a message larger than its send buffer (the kernel reports it doubled)
+        self._bundle_limit = min(MAX_MESSAGE, mine.getsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF) // 2)
         self._sock = mine
         self._alive = True
         return self
@@ -265,40 +268,45 @@ class ForkServer:
         request = {"id": request_id, "argv": list(argv), "cwd": cwd, "env": dict(environment), "log": log_path,
                    "append": append, "folder": log_folder}
         with self._lock:
-            try:
-                if not self._alive or self._sock is None:
-                    raise ForkServerError("the built-in runner's fork server has ended")
-                self._outbox[request_id] = json.dumps(request).encode()
-                if not later:
-                    self._send_kept()
-            except ForkServerError:
+            if not self._alive or self._sock is None:
                 with self._table_lock:
                     self._replies.pop(request_id, None)
-                raise
+                raise ForkServerError("the built-in runner's fork server has ended")
+            self._outbox[request_id] = json.dumps(request).encode()
+            if not later:
+                self._send_kept()
         return request_id
 
     def send_submitted(self) -> None:
-        """Send the requests :meth:`submit` kept (``later``): one wake-up of the server for all of them.
-        Should the server be gone, its end answers them (``gone``, see :meth:`_ended`)."""
+        """Send the requests :meth:`submit` kept (``later``): one wake-up of the server for all of them."""
         with self._lock:
-            try:
-                self._send_kept()
-            except ForkServerError:
-                pass
+            self._send_kept()
 
     def _send_kept(self) -> None:
-        """Send the kept requests (holding ``_lock``); :class:`ForkServerError` when the server is gone
-        (those not sent stay until its end answers them)."""
-        while self._outbox and self._alive and self._sock is not None:
-            kept = list(self._outbox.values())
-            self._outbox.clear()
-            try:
-                for message in bundles(kept):
-                    self._send(message)
-            except ForkServerError:
-                raise
-            except OSError as exc:
-                raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+        """Send the kept requests (holding ``_lock``). Should the server have ended, its end answered them
+        (``gone``, see :meth:`_ended`); those the socket refuses while it lives are answered here
+        (``failed``): the server never heard of them."""
+        if not self._outbox or not self._alive or self._sock is None:
+            return
+        kept = list(self._outbox.items())
+        self._outbox.clear()
+        sent = 0
+        try:
+            for count, message in bundles([request for _id, request in kept], self._bundle_limit):
+                self._send(message)
+                sent += count
+        except OSError as exc:                       # (a ForkServerError: it ended meanwhile)
+            if self._alive:
+                self._refuse([request_id for request_id, _request in kept[sent:]],
+                             f"its request could not be sent: {exc.strerror or exc}")
+
+    def _refuse(self, request_ids: list[str], reason: str) -> None:
+        """Answer requests the server never got as it answers those it cannot start."""
+        with self._table_lock:
+            replies = [(request_id, self._replies.pop(request_id, None)) for request_id in request_ids]
+        for request_id, reply in replies:
+            if reply is not None:
+                reply({"id": request_id, "event": "failed", "reason": reason})
 
     def withdraw(self, request_id: str) -> None:
         """Take back a submitted request that still waits for a slot (answered ``withdrawn``, or

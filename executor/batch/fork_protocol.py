@@ -89,23 +89,23 @@ def send(sock: socket.socket, message: dict | bytes, fds: list[int] | None = Non
         sock.sendmsg([data], [], flags)
 
 
-def bundles(requests: list[bytes]) -> list[bytes]:
-    """Encoded requests (no descriptors attached) as few messages as :data:`MAX_MESSAGE` allows:
-    ``{"requests": [...]}``, or the request itself when it goes alone. One message wakes the server
-    once for all of them (sending each woke it each time: measured on 2 cores, a ``sendmsg`` cost the
-    runner 60 us, its reading 4 us). One request is far below that size (its paths are bounded by
-    the system's 4 KiB each)."""
-    messages: list[bytes] = []
+def bundles(requests: list[bytes], limit: int = MAX_MESSAGE) -> list[tuple[int, bytes]]:
+    """Encoded requests (no descriptors attached) as few messages of at most ``limit`` bytes as can
+    hold them, each with the number of requests it carries: ``{"requests": [...]}``, or the request
+    itself when it goes alone. One message wakes the server once for all of them (sending each woke
+    it each time: measured on 2 cores, a ``sendmsg`` cost the runner 60 us, its reading 4 us). One
+    request is far below that size (its paths are bounded by the system's 4 KiB each)."""
+    messages: list[tuple[int, bytes]] = []
     group: list[bytes] = []
     size = 0
     for request in requests:
-        if group and size + len(request) + 1 > MAX_MESSAGE - len(_BUNDLE_FRAME):
-            messages.append(_bundle(group))
+        if group and size + len(request) + 1 > limit - len(_BUNDLE_FRAME):
+            messages.append((len(group), _bundle(group)))
             group, size = [], 0
         group.append(request)
         size += len(request) + 1
     if group:
-        messages.append(_bundle(group))
+        messages.append((len(group), _bundle(group)))
     return messages
 
 

@@ -211,10 +211,11 @@ def test_ctrl_c_stops_builtin_jobs_and_resume_finishes(tmp_path):
     assert root.get("tests") == "6" and root.find(".//error[@type='cancelled']") is not None
     log = (tmp_path / "res/job0/log.txt").read_text()
     assert "aborted by SIGINT" in log                               # the job's own handler ran, as launched
-    # job2 and job3 were handed to the fork server ahead, waiting for a slot: withdrawn, never run,
-    # and their folders are gone again
+    # job2 to job5 were handed to the fork server ahead, waiting for a slot: withdrawn, never run, back in
+    # the queue (only the two that ran were cancelled), and their folders are gone again
     assert records(tmp_path) == [] and sorted(p.name for p in (tmp_path / "res").iterdir() if p.is_dir()) == [
         "job0", "job1"]
+    assert "6 job(s): 4 queued, 2 cancelled;" in out and "cancelled before it started" not in out, out
     resumed = run_cli(["-o", "res", "--resume", "-j", "2"], tmp_path, env, timeout=120)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert os.path.exists(tmp_path / "res/job5/test.xml")

@@ -20,7 +20,7 @@ from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
 from coverage_engine.results.read import JunitUnreadable, clean_text, has_problem, read_cases
 from executor.children.process import ProcessOutcome
 from store.jobs import JUNIT_MAX_BYTES, LOG_TAIL_BYTES, JobResult
-from store.states import JobState
+from store.states import NOT_STARTED_REASON, JobState
 
 #: Largest coverage.json read with a job's result.
 COVERAGE_MAX_BYTES = 16 * 1024 * 1024
@@ -211,6 +211,12 @@ def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: Fil
                      log_tail=None if status is JobState.PASSED else log_tail(log), output_dir=folder, log_path=log,
                      coverage_json=None if coverage_mark is None else read_coverage(
                          os.path.join(folder, COVERAGE_FILE), coverage_mark))
+
+
+def never_started(result: JobResult) -> bool:
+    """Whether an attempt ended before its child started: cancelled (a stop) while it waited for its
+    turn or at the fork server. Its job goes back to the queue; nothing of it is recorded."""
+    return result.status is JobState.CANCELLED and result.reason == NOT_STARTED_REASON
 
 
 def launch_failure(output_dir: str | os.PathLike[str], started_at: float, finished_at: float,

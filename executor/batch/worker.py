@@ -41,7 +41,7 @@ from executor.batch.progress import Reporter
 from executor.batch.recorder import STARTED_RECORD_AFTER, RecorderHooks, ResultRecorder, WorkerSummary
 from executor.batch.repeats import attempt_environment
 from executor.batch.spawned_run import SpawnedRun, loop_can_spawn
-from executor.batch.verdict import disk_full_result, launch_failure
+from executor.batch.verdict import disk_full_result, launch_failure, never_started
 from executor.batch.watchdog import Watchdog
 from executor.children.process import RUNNER_ENV, disk_full
 from executor.children.spawn import can_spawn_logged
@@ -474,6 +474,12 @@ class Worker:
                 self._add(made)
             return
         job = event.run.job
+        if isinstance(event, Done) and never_started(event.result):
+            self._runs.pop(job.id, None)          # taken back before its start (a stop): back to the
+            self._driven.pop(job.id, None)        # queue, as the jobs claimed and not handed over
+            if not event.run.lost:
+                self._give_back([job.id])
+            return
         if isinstance(event, Started):
             self.hand_over.started(event.at)
         if isinstance(event, Started) or job.id not in self._shown_running:

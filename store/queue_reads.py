@@ -15,7 +15,7 @@ from store.database import StoreError
 from store.jobs import Batch, Job
 from store.queue_statements import JOB_COLUMNS, in_shared_batches
 from store.queue_tables import batches, job_attempts, jobs
-from store.states import JobState
+from store.states import FINAL, JobState
 
 #: Columns of a job with its result (for reports); the scenario text is read only by workers that need it.
 _RESULT_COLUMNS = [c for c in jobs.c if c.name != "scenario_text"]
@@ -100,14 +100,18 @@ class QueueReads:
         with self._tx() as conn:
             return conn.execute(select(jobs.c.scenario_text).where(jobs.c.id == job_id)).scalar()
 
-    def recent_ends(self, batch_id: int, since: float) -> tuple[int, float | None]:
-        """How many of the batch's jobs ended at ``since`` or later, and the earliest start among them
-        (None when none did): the batch's recent throughput, for an ETA."""
-        stmt = select(func.count(), func.min(jobs.c.started_at)).where(
-            jobs.c.batch_id == batch_id, jobs.c.finished_at >= since)
+    def recent_pace(self, batch_id: int, last: int) -> tuple[int, float | None]:
+        """The batch's latest ``last`` verdicts: how many there are, and the seconds from the earliest
+        start to the latest end among them (None when there is none), by the workers' own clocks: its
+        recent throughput, for an ETA."""
+        latest = (select(jobs.c.started_at, jobs.c.finished_at)
+                  .where(jobs.c.batch_id == batch_id, jobs.c.finished_at.is_not(None),
+                         jobs.c.status.in_([state.value for state in FINAL]))
+                  .order_by(jobs.c.finished_at.desc()).limit(last).subquery())
+        stmt = select(func.count(), func.min(latest.c.started_at), func.max(latest.c.finished_at))
         with self._tx() as conn:
-            count, first = conn.execute(stmt).one()
-        return int(count), None if first is None else float(first)
+            count, first, end = conn.execute(stmt).one()
+        return int(count), None if first is None or end is None else float(end) - float(first)
 
     @staticmethod
     def _scope(stmt: Select[Any], batch_id: int | None, shared_only: bool) -> Select[Any]:

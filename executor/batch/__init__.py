@@ -14,7 +14,8 @@
     server, or a launched command started with ``posix_spawn`` and watched through its process
     descriptor; the loop's inbox waits on both and on the job threads' events.
 ``job_run`` / ``job_folders``
-    one attempt in a thread (jobs with ``--post-run`` hooks or an echoed output) and the job's own folder.
+    one attempt in a thread (jobs with ``--post-run`` hooks or an echoed output) and the job's own folder
+    (with the scenario file the job runs there).
 ``builtin_runner`` / ``forked_process`` / ``fork_server`` / ``fork_protocol`` / ``fork_child`` / ``fork_dispatch`` / ``worker_server``
     the built-in runner: jobs forked from a server that has imported the runtime once (the worker's
     handle on each), what a forked child does to become the job, the dispatcher that spreads the forks over several warm copies

@@ -3,6 +3,9 @@
 A symbolic link planted where a job's folder goes (``results/cut4 -> /home/me``) would make the job
 write its log and results through it; so would a link among the root's own subfolders. Every job's
 folder must be a real directory whose real path lies inside the root's real path.
+
+:func:`scenario_to_run` says which scenario file a job runs: the original, or on a host without it the
+copy the store keeps, written into the job's folder.
 """
 
 from __future__ import annotations
@@ -10,6 +13,11 @@ from __future__ import annotations
 import os
 import stat
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:       # (the fork server makes job folders with this module: it loads no more than it needs)
+    from store.jobs import Batch, Job
+    from store.queue import QueueStore
 
 
 def prepare_job_folder(root: Path, folder: Path, real_root: str) -> bool:
@@ -64,3 +72,25 @@ class JobFolders:
             root.mkdir(parents=True, exist_ok=True)
             real = self._real_roots[key] = os.path.realpath(root)
         return real
+
+
+def scenario_to_run(store: QueueStore, job: Job, batch: Batch, output_dir: Path) -> str:
+    """The scenario path a job runs: the original file, or (on a host without it, or with another
+    version of it) the copy kept in the store, written into the job's folder."""
+    import hashlib  # (here: the fork server, which uses this module, loads no more than a job would)
+
+    path = job.scenario_path
+    if batch.mode == "local":
+        return path
+    try:
+        if hashlib.sha256(Path(path).read_bytes()).hexdigest() == job.scenario_sha:
+            return path
+    except OSError:
+        pass
+    text = store.scenario_text(job.id)
+    if text is None:
+        return path
+    output_dir.mkdir(parents=True, exist_ok=True)
+    copy = output_dir / Path(path).name
+    copy.write_text(text, encoding="utf-8")
+    return str(copy)

@@ -30,30 +30,29 @@ class StatusSnapshot:
         return sum(self.counts.values())
 
 
-#: Seconds of recent ends the ETA goes by (the batch's pace now, not over its whole life).
-ETA_WINDOW = 60.0
+#: Verdicts the ETA goes by: the batch's pace now, not over its whole life.
+ETA_JOBS = 20
 
 
-def snapshot(store: QueueStore, batch: Batch, now: float | None = None) -> StatusSnapshot:
+def snapshot(store: QueueStore, batch: Batch) -> StatusSnapshot:
     """Read counts and running jobs of ``batch`` and estimate the time left from its recent pace."""
     counts = store.counts(batch.id)
     running = Counter((j.worker_host or "?", j.worker_id or "?") for j in store.running(batch.id))
     remaining = counts[JobState.QUEUED] + counts[JobState.RUNNING]
-    return StatusSnapshot(batch, counts, dict(running), 0.0 if remaining == 0 else
-                          eta(store, batch.id, remaining, time.time() if now is None else now))
+    eta_seconds = 0.0 if remaining == 0 else eta(store, batch.id, remaining) if running else None
+    return StatusSnapshot(batch, counts, dict(running), eta_seconds)
 
 
-def eta(store: QueueStore, batch_id: int, remaining: int, now: float) -> float | None:
-    """Seconds until ``remaining`` jobs have ended, at the pace jobs ended in the last :data:`ETA_WINDOW`
-    seconds (None when none did: stopped, or not begun). The pace, not the jobs in state ``running`` and
-    their mean time: a single-host run holds more jobs than it runs at once (the next ones for each
-    slot), so those would promise an end many times too early."""
-    since = now - ETA_WINDOW
-    ended, first_start = store.recent_ends(batch_id, since)
-    if ended == 0 or first_start is None:
+def eta(store: QueueStore, batch_id: int, remaining: int) -> float | None:
+    """Seconds until ``remaining`` jobs have ended, at the pace of the latest :data:`ETA_JOBS` verdicts
+    (from the earliest start to the latest end among them, by the workers' clocks: the host asking
+    needs no clock in common with them); None before a verdict. The pace, not the jobs in state
+    ``running`` and their mean time: a single-host run holds more jobs than it runs at once (the next
+    ones for each slot), so those would promise an end many times too early."""
+    ended, span = store.recent_pace(batch_id, ETA_JOBS)
+    if ended == 0 or span is None or span <= 0:
         return None
-    window = now - max(since, first_start)
-    return remaining * window / ended if window > 0 else None
+    return remaining * span / ended
 
 
 def _eta_text(seconds: float | None) -> str:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import functools
 import gc
-import hashlib
 import threading
 import time
 from collections import deque
@@ -33,7 +32,7 @@ from executor.batch.claim_pacing import ClaimPacer, StoreBackoff
 from executor.batch.forked_run import ForkedRun, Reply
 from executor.batch.hand_over import HandOver
 from executor.batch.inbox import Inbox
-from executor.batch.job_folders import JobFolders
+from executor.batch.job_folders import JobFolders, scenario_to_run
 from executor.batch.job_run import Done, JobRun, Started
 from executor.batch.leases import LeaseKeeper
 from executor.batch.loop_run import LoopRun
@@ -112,6 +111,7 @@ class Worker:
         self._started = 0
         self._unsure_claims = False                    # a claim may have committed unheard: heartbeat soon
         self._shown_running: set[int] = set()          # jobs the display counts as running
+        self._taken_back: set[int] = set()             # jobs ended before their start, to give back
         self._folders = JobFolders()
 
     # ------------------------------------------------------------------ control
@@ -182,18 +182,20 @@ class Worker:
             if self._stop.is_set():
                 self._cancel_all()
                 stopped_at = stopped_at or now
-                if not self._runs and self.recorder and now - stopped_at > _GIVE_UP_AFTER_STOP:
-                    self.reporter.warn(f"{self.recorder.drop()} result(s) could not be written to the store")
+                if not self._runs and now - stopped_at > _GIVE_UP_AFTER_STOP:
+                    self._give_up_writes()
             if ready and now >= next_sweep and self._store_step(self._sweep):
                 next_sweep = now + self.leases.every
             if ready and (self._runs or self._waiting or self.recorder or self._unsure_claims) \
                     and (now >= next_beat or self._unsure_claims) and self._store_step(self._heartbeat):
                 next_beat = now + self.leases.every
+            if self._taken_back and ready:
+                self._store_step(self._give_back_taken)
             if self._waiting and ready and not self._stop.is_set():
                 self._store_step(self._start_waiting)
             if self._may_claim(now):
                 self._store_step(self._claim)
-            if not self._runs and not self._waiting and not self.recorder:
+            if not self._runs and not self._waiting and not self.recorder and not self._taken_back:
                 if self._stop.is_set():
                     self.summary.interrupted = True
                     break
@@ -204,6 +206,19 @@ class Worker:
                         break
             self._wait_for_event()
         return self.summary
+
+    def _give_up_writes(self) -> None:
+        """After a stop the store stayed away: drop what could not be written (``--resume`` runs those jobs)."""
+        if self.recorder:
+            self.reporter.warn(f"{self.recorder.drop()} result(s) could not be written to the store")
+        if self._taken_back:
+            self.reporter.warn(f"{len(self._taken_back)} job(s) not started could not be given back to the queue")
+            self._taken_back.clear()
+
+    def _give_back_taken(self) -> None:
+        """Give the jobs taken back before their start back to the queue, all in one store statement."""
+        self.store.release(self.identity, self._taken_back)
+        self._taken_back.clear()
 
     def _store_step(self, step: Callable[[], None]) -> bool:
         """Run a store step under the back-off; whether the store took it."""
@@ -279,7 +294,7 @@ class Worker:
                 made_folder = self._folders.prepare(root, output_dir)
             else:
                 folder_root = (str(root), self._folders.real_root(root))
-            scenario = self._scenario_file(job, batch, output_dir)
+            scenario = scenario_to_run(self.store, job, batch, output_dir)
         except StoreError:
             raise
         except OSError as exc:
@@ -343,24 +358,6 @@ class Worker:
         if self._can_spawn is None:
             self._can_spawn = loop_can_spawn() and can_spawn_logged(self.settings.cwd)
         return self._can_spawn
-
-    def _scenario_file(self, job: Job, batch: Batch, output_dir: Path) -> str:
-        """The scenario path to run: the original file, or (on a host without it) the copy kept in the store."""
-        path = job.scenario_path
-        if batch.mode == "local":
-            return path
-        try:
-            if hashlib.sha256(Path(path).read_bytes()).hexdigest() == job.scenario_sha:
-                return path
-        except OSError:
-            pass
-        text = self.store.scenario_text(job.id)
-        if text is None:
-            return path
-        output_dir.mkdir(parents=True, exist_ok=True)
-        copy = output_dir / Path(path).name
-        copy.write_text(text, encoding="utf-8")
-        return str(copy)
 
     # ------------------------------------------------------------------ leases
     def _heartbeat(self) -> None:
@@ -478,7 +475,7 @@ class Worker:
             self._runs.pop(job.id, None)          # taken back before its start (a stop): back to the
             self._driven.pop(job.id, None)        # queue, as the jobs claimed and not handed over
             if not event.run.lost:
-                self._give_back([job.id])
+                self._taken_back.add(job.id)      # (written by the loop, under the store's back-off)
             return
         if isinstance(event, Started):
             self.hand_over.started(event.at)

@@ -297,29 +297,26 @@ class ForkServer:
                 sent += count
         except OSError as exc:                       # (a ForkServerError: it ended meanwhile)
             if self._alive:
-                self._refuse([request_id for request_id, _request in kept[sent:]],
-                             f"its request could not be sent: {exc.strerror or exc}")
+                self._answer_unsent([request_id for request_id, _request in kept[sent:]],
+                                    {"event": "failed", "reason": f"its request could not be sent: {exc.strerror or exc}"})
 
-    def _refuse(self, request_ids: list[str], reason: str) -> None:
-        """Answer requests the server never got as it answers those it cannot start."""
+    def _answer_unsent(self, request_ids: list[str], answer: dict) -> None:
+        """Answer requests the server never got (``failed``, ``withdrawn``) as it would have."""
         with self._table_lock:
             replies = [(request_id, self._replies.pop(request_id, None)) for request_id in request_ids]
         for request_id, reply in replies:
             if reply is not None:
-                reply({"id": request_id, "event": "failed", "reason": reason})
+                reply({"id": request_id, **answer})
 
     def withdraw(self, request_id: str) -> None:
         """Take back a submitted request that still waits for a slot (answered ``withdrawn``, or
         ``started`` when it had begun: stop that one as any other)."""
         with self._lock:
             kept = self._outbox.pop(request_id, None) is not None
-        if not kept:
+        if kept:
+            self._answer_unsent([request_id], {"event": "withdrawn"})
+        else:
             self._withdraw(request_id)
-            return
-        with self._table_lock:                 # never sent: answered here
-            reply = self._replies.pop(request_id, None)
-        if reply is not None:
-            reply({"id": request_id, "event": "withdrawn"})
 
     def _forget(self, request_id: str) -> None:
         with self._table_lock:

@@ -36,7 +36,7 @@ import sys
 from collections import OrderedDict
 from collections.abc import Callable
 
-from executor.batch.fork_protocol import fork_paired, receive, send
+from executor.batch.fork_protocol import fork_paired, receive, send, spawn_requests
 
 
 class Forker:
@@ -105,11 +105,9 @@ class Dispatcher:
                 return False
             if "withdraw" in message:
                 self._withdraw(str(message["withdraw"]))
-            elif "requests" in message:                  # several at once, none with a descriptor
-                for request in message["requests"]:
-                    self.waiting[str(request.get("id"))] = (request, [])
             else:
-                self.waiting[str(message.get("id"))] = (message, fds)
+                for request, attached in spawn_requests(message, fds):
+                    self.waiting[str(request.get("id"))] = (request, attached)
 
     def _read_notes(self, forker: Forker) -> bool:
         """What ``forker`` says (a request done with); False when it has ended."""

@@ -117,6 +117,14 @@ def _bundle(group: list[bytes]) -> bytes:
     return group[0] if len(group) == 1 else b'{"requests": [' + b",".join(group) + b"]}"
 
 
+def spawn_requests(message: dict, fds: list[int]) -> list[tuple[dict, list[int]]]:
+    """The spawn requests of a message the runner sent, each with its descriptors: the requests of a
+    bundle (:func:`bundles`, none with a descriptor), or the message itself."""
+    if "requests" in message:
+        return [(request, []) for request in message["requests"]]
+    return [(message, fds)]
+
+
 def receive(sock: socket.socket, max_fds: int = 0, flags: int = 0, *,
             after_reset: bool = False) -> tuple[dict | None, list[int]]:
     """The next message (None when the other end closed) and the descriptors that came with it

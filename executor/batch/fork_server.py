@@ -55,7 +55,15 @@ import time
 from typing import TYPE_CHECKING
 
 from executor.batch.fork_child import HELD_BACK, die_with_parent, run_child
-from executor.batch.fork_protocol import ENTRY_POINT, FolderRefused, fork_paired, open_log, receive, send
+from executor.batch.fork_protocol import (
+    ENTRY_POINT,
+    FolderRefused,
+    fork_paired,
+    open_log,
+    receive,
+    send,
+    spawn_requests,
+)
 
 if TYPE_CHECKING:
     from executor.batch.fork_dispatch import Dispatcher
@@ -251,11 +259,9 @@ class _Server:
                 return False
             if "withdraw" in message:
                 self._withdraw(str(message["withdraw"]))
-            elif "requests" in message:                  # several at once (fork_protocol.bundles)
-                for request in message["requests"]:
-                    self._request(request, [])
             else:
-                self._request(message, fds)
+                for request, attached in spawn_requests(message, fds):
+                    self._request(request, attached)
             if not select.select([self.requests.fileno()], [], [], 0)[0]:
                 return True
 

@@ -111,7 +111,7 @@ class Worker:
         self._started = 0
         self._unsure_claims = False                    # a claim may have committed unheard: heartbeat soon
         self._shown_running: set[int] = set()          # jobs the display counts as running
-        self._taken_back: set[int] = set()             # jobs ended before their start, to give back
+        self._taken_back: set[int] = set()             # jobs a stop took back before their start, to give back
         self._folders = JobFolders()
 
     # ------------------------------------------------------------------ control
@@ -216,7 +216,8 @@ class Worker:
             self._taken_back.clear()
 
     def _give_back_taken(self) -> None:
-        """Give the jobs taken back before their start back to the queue, all in one store statement."""
+        """Give the jobs a stop took back before their start (claimed and not handed over, or withdrawn
+        from the fork server) back to the queue, all in one store statement, under the back-off."""
         self.store.release(self.identity, self._taken_back)
         self._taken_back.clear()
 
@@ -260,13 +261,6 @@ class Worker:
                     raise
         finally:
             self.hand_over.send_submitted()
-
-    def _give_back(self, job_ids: list[int]) -> None:
-        """Release claimed jobs that will not be started here (if the store is unreachable, the next heartbeat does)."""
-        try:
-            self.store.release(self.identity, job_ids)
-        except StoreUnavailable:
-            self._unsure_claims = True
 
     def _batch(self, batch_id: int) -> Batch:
         if batch_id not in self._batches:
@@ -384,10 +378,8 @@ class Worker:
         return counts[JobState.QUEUED] + counts[JobState.RUNNING]
 
     def _cancel_all(self) -> None:
-        if self._waiting:                    # claimed, never started: back to the queue
-            job_ids = [job.id for job in self._waiting]
-            self._waiting.clear()
-            self._give_back(job_ids)
+        self._taken_back.update(job.id for job in self._waiting)   # claimed, never started: back to the queue
+        self._waiting.clear()
         if self._force.is_set():
             for run in self._stopping_order():
                 run.cancel(grace=0)
@@ -471,19 +463,18 @@ class Worker:
                 self._add(made)
             return
         job = event.run.job
-        if isinstance(event, Done) and never_started(event.result):
-            self._runs.pop(job.id, None)          # taken back before its start (a stop): back to the
-            self._driven.pop(job.id, None)        # queue, as the jobs claimed and not handed over
-            if not event.run.lost:
-                self._taken_back.add(job.id)      # (written by the loop, under the store's back-off)
-            return
-        if isinstance(event, Started):
+        if isinstance(event, Done):
+            self._runs.pop(job.id, None)
+            self._driven.pop(job.id, None)
+            if never_started(event.result):       # taken back before its start (a stop): back to the
+                if not event.run.lost:            # queue, as the jobs claimed and not handed over
+                    self._taken_back.add(job.id)
+                return
+        else:
             self.hand_over.started(event.at)
         if isinstance(event, Started) or job.id not in self._shown_running:
             self._shown_running.add(job.id)
             self.reporter.job_started(job)
         if isinstance(event, Done):
-            self._runs.pop(job.id, None)
-            self._driven.pop(job.id, None)
             self._shown_running.discard(job.id)
         self.recorder.add(event, time.monotonic())

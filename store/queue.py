@@ -281,17 +281,31 @@ class QueueStore(QueueReads):
         return self._reclaim([jobs.c.worker_id == worker_id], max_lost, reason)
 
     def _reclaim(self, where: list, max_lost: int, reason: str) -> list[Reclaimed]:
+        """Queue again the jobs ``where`` selects among the running ones.
+
+        Only a job whose start was recorded (it has a child) lost an attempt: it is charged, and ends as
+        ``error`` at the ``max_lost``-th loss. A job its holder took but never started (held for a
+        free slot, or waiting at the fork server) goes back as it came, like :meth:`release`: a runner
+        killed while it held many jobs would otherwise charge each of them with a run that never
+        happened, and three such kills would end a job that never ran as an error. (A start is recorded
+        :data:`~executor.batch.recorder.STARTED_RECORD_AFTER` after it, or with the job's result: a
+        holder dying within that time of a start is not charged to the job.)
+        """
         cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
                 jobs.c.lost]
+        started, unstarted = jobs.c.child_pid.is_not(None), jobs.c.child_pid.is_(None)
         now = time.time()
         out: list[Reclaimed] = []
         with self._tx() as conn:
+            returned = self._move(conn, Transition.RECLAIM, JobState.QUEUED, [*where, unstarted],
+                                  dict(lease_expires_at=None, reason=f"{reason} before it started"),
+                                  returning=cols)
             requeued = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
-                                  [*where, jobs.c.lost + 1 < max_lost],
+                                  [*where, started, jobs.c.lost + 1 < max_lost],
                                   dict(lost=jobs.c.lost + 1, lease_expires_at=None, reason=reason),
                                   returning=cols)
             abandoned = self._move(conn, Transition.ABANDON, JobState.ERROR,
-                                   [*where, jobs.c.lost + 1 >= max_lost],
+                                   [*where, started, jobs.c.lost + 1 >= max_lost],
                                    dict(lost=jobs.c.lost + 1, lease_expires_at=None, finished_at=now,
                                         reason=f"{reason} {max_lost} times; the job keeps losing its worker"),
                                    returning=cols)
@@ -303,7 +317,8 @@ class QueueStore(QueueReads):
                 conn.execute(insert(job_attempts), [
                     dict(job_id=r.job_id, attempt=r.attempt, outcome="lost", finished_at=now,
                          worker_id=r.worker_id, host=r.worker_host, reason=reason) for r in out])
-        return out
+        return out + [Reclaimed(job_id=r.id, attempt=r.attempts, worker_id=r.worker_id, worker_host=r.worker_host,
+                                child_pid=None, status=JobState.QUEUED) for r in returned]
 
 
 def _is_transient(exc: DBAPIError) -> bool:

@@ -72,6 +72,7 @@ def test_results_only_from_the_lease_holder_and_only_once(store_url):
         with pytest.raises(LeaseLost):
             store.finish(job, _result(JobState.FAILED, 1))           # idempotent: one final result per job
         [late] = store.claim(a, batch_id=batch.id)
+        assert store.started(late, 4243)
         reclaimed = store.reclaim_expired(now=time.time() + 3600)
         assert [(r.job_id, r.worker_id, r.status) for r in reclaimed] == [(late.id, "a-id", JobState.QUEUED)]
         [taken] = store.claim(b, batch_id=batch.id)
@@ -93,6 +94,7 @@ def test_heartbeat_keeps_the_lease_and_expiry_is_bounded(store_url):
         worker = _worker("a")
         for round_ in range(3):
             [job] = store.claim(worker, batch_id=batch.id, lease=0.5)
+            assert store.started(job, 4242)
             assert store.heartbeat(worker, lease=30) == {job.id}
             assert store.reclaim_expired(now=time.time() + 5) == []     # the heartbeat extended it
             reclaimed = store.reclaim_expired(now=time.time() + 60)
@@ -102,6 +104,32 @@ def test_heartbeat_keeps_the_lease_and_expiry_is_bounded(store_url):
         [job] = store.jobs(batch.id)
         assert job.status is JobState.ERROR and job.lost == 3 and "3 times" in job.reason
         assert store.heartbeat(worker) == set()
+    finally:
+        store.close()
+
+
+def test_a_job_taken_back_before_it_started_is_not_charged_with_a_lost_attempt(store_url):
+    """A runner killed while it held jobs for its next slots: only the job it had started lost a run."""
+    store, batch = _store(store_url, count=3)
+    try:
+        for kill in range(3):                        # as many kills as a started job survives
+            ran, *held = store.claim(_worker(f"runner{kill}"), limit=3, batch_id=batch.id)
+            assert store.started(ran, 4242)
+            reclaimed = store.reclaim_worker(f"runner{kill}-id", "the runner ended")
+            assert {(r.job_id, r.child_pid) for r in reclaimed} == \
+                {(ran.id, 4242), *((job.id, None) for job in held)}
+            if kill < 2:
+                assert {r.status for r in reclaimed} == {JobState.QUEUED}
+        jobs = {j.name: j for j in store.jobs(batch.id)}
+        assert jobs["j0"].status is JobState.ERROR and jobs["j0"].lost == 3 and "3 times" in jobs["j0"].reason
+        for name in ("j1", "j2"):                    # held three times, started never: queued, uncharged
+            job = jobs[name]
+            assert job.status is JobState.QUEUED and job.lost == 0, job
+            assert "before it started" in job.reason
+            assert store.attempts(job.id) == []
+        assert [a["outcome"] for a in store.attempts(jobs["j0"].id)] == ["lost"] * 3
+        [again] = store.claim(_worker("last"), batch_id=batch.id)
+        assert again.name == "j1" and again.attempts == 4 and again.child_pid is None
     finally:
         store.close()
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import time
 from pathlib import Path
 
@@ -122,3 +123,52 @@ def test_results_the_store_refuses_for_a_while_are_kept_and_written_once_it_take
         statuses = admin.execute("SELECT status FROM jobs").fetchall()
     assert attempts == 3 and statuses == [("passed",)] * 3, (attempts, statuses, out)
     assert ledger(tmp_path) == {n: 1 for n in names}
+
+
+@pytest.mark.slow
+def test_a_stop_gives_back_the_jobs_it_held_once_the_store_takes_them_again(pg_url, tmp_path):
+    """Ctrl-C while the store refuses to queue jobs again: the runner keeps the jobs it held for its next
+    slots (claimed, never started) and gives them back, uncharged, once the store works again; no job is
+    left running in the store and none lost an attempt."""
+    import psycopg
+
+    env = cli_env(tmp_path)
+    child = write_child(tmp_path)
+    names = [f"j{i:02d}" for i in range(30)]
+    write_scenarios(tmp_path / "in", {n: "sleep=0.5" for n in names})
+    database = pg_url.rsplit("/", 1)[1]
+    with psycopg.connect(f"postgresql://postgres@127.0.0.1:5432/{database}", autocommit=True) as admin:
+        runner = start_cli(["-i", "in", "-o", "results", "--store", pg_url, "-j", "2", "--",
+                            *child_command(child)], tmp_path, env)
+        deadline = time.monotonic() + 60
+        while sum(ledger(tmp_path).values()) < 2:            # it runs, and holds the next jobs
+            assert time.monotonic() < deadline and runner.poll() is None
+            time.sleep(0.05)
+        admin.execute("CREATE TABLE gate (open boolean)")
+        admin.execute("""CREATE FUNCTION requeue_gate() RETURNS trigger LANGUAGE plpgsql AS $$
+            BEGIN
+              IF NOT EXISTS (SELECT 1 FROM gate WHERE open) THEN
+                RAISE EXCEPTION 'server closed the connection unexpectedly (test)';
+              END IF;
+              RETURN NEW;
+            END $$""")
+        admin.execute("CREATE TRIGGER requeue_gate BEFORE UPDATE ON jobs FOR EACH ROW "
+                      "WHEN (OLD.status = 'running' AND NEW.status = 'queued') EXECUTE FUNCTION requeue_gate()")
+        held = admin.execute("SELECT count(*) FROM jobs WHERE status = 'running'").fetchone()[0]
+        assert held > 2, "the runner held no job beyond its two slots"
+        runner.send_signal(signal.SIGINT)
+        time.sleep(2.0)                                      # the give-back fails, and is tried again
+        assert runner.poll() is None, runner.communicate()[0]
+        assert admin.execute("SELECT count(*) FROM jobs WHERE status = 'running'").fetchone()[0] > 0
+        admin.execute("INSERT INTO gate VALUES (true)")
+        out = runner.communicate(timeout=60)[0]
+        assert runner.returncode == 130, out
+        assert "retrying" in out and "could not be given back" not in out, out
+        statuses = dict(admin.execute("SELECT status, count(*) FROM jobs GROUP BY status").fetchall())
+        lost = admin.execute("SELECT count(*) FROM jobs WHERE lost > 0").fetchone()[0]
+        charged = admin.execute("SELECT count(*) FROM job_attempts WHERE outcome = 'lost'").fetchone()[0]
+    assert "running" not in statuses and statuses.get("queued", 0) >= held - 2, (statuses, out)
+    assert lost == 0 and charged == 0, out
+    ran = ledger(tmp_path)
+    assert all(count == 1 for count in ran.values()), ran
+    assert sum(statuses.values()) == len(names)

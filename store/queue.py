@@ -36,6 +36,11 @@ DEFAULT_LEASE = 60.0
 #: Lease expirations after which a job ends as ``error`` instead of being queued again.
 DEFAULT_MAX_LOST = 3
 
+#: Claims of a job within which a holder lost before the job's start was recorded costs the job nothing
+#: (see ``QueueStore._reclaim``); from this claim on such a loss is charged like any other, so a job whose
+#: every run ends its runner before the start is recorded still ends as an error, after a dozen tries.
+UNCHARGED_CLAIMS = 10
+
 #: The columns the record of an attempt is written with (see ``QueueStore._end``).
 _ATTEMPT_KEYS = ("job_id", "attempt", "outcome", "exit_code", "started_at", "finished_at", "worker_id", "host",
                  "log_path", "reason")
@@ -283,29 +288,31 @@ class QueueStore(QueueReads):
     def _reclaim(self, where: list, max_lost: int, reason: str) -> list[Reclaimed]:
         """Queue again the jobs ``where`` selects among the running ones.
 
-        Only a job whose start was recorded (it has a child) lost an attempt: it is charged, and ends as
+        A job whose start was recorded (it has a child) lost an attempt: it is charged, and ends as
         ``error`` at the ``max_lost``-th loss. A job its holder took but never started (held for a
         free slot, or waiting at the fork server) goes back as it came, like :meth:`release`: a runner
         killed while it held many jobs would otherwise charge each of them with a run that never
-        happened, and three such kills would end a job that never ran as an error. (A start is recorded
-        :data:`~executor.batch.recorder.STARTED_RECORD_AFTER` after it, or with the job's result: a
-        holder dying within that time of a start is not charged to the job.)
+        happened, and three such kills would end a job that never ran as an error. A start is recorded
+        :data:`~executor.batch.recorder.STARTED_RECORD_AFTER` after it (a job that ends sooner has its
+        result written instead), so a holder lost within that time of a start is not charged either;
+        from the :data:`UNCHARGED_CLAIMS`-th claim of a job on, every loss is.
         """
         cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
                 jobs.c.lost]
-        started, unstarted = jobs.c.child_pid.is_not(None), jobs.c.child_pid.is_(None)
         now = time.time()
         out: list[Reclaimed] = []
         with self._tx() as conn:
-            returned = self._move(conn, Transition.RECLAIM, JobState.QUEUED, [*where, unstarted],
+            returned = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
+                                  [*where, jobs.c.child_pid.is_(None), jobs.c.attempts < UNCHARGED_CLAIMS],
                                   dict(lease_expires_at=None, reason=f"{reason} before it started"),
                                   returning=cols)
+            # (the jobs left running among ``where`` are the ones charged)
             requeued = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
-                                  [*where, started, jobs.c.lost + 1 < max_lost],
+                                  [*where, jobs.c.lost + 1 < max_lost],
                                   dict(lost=jobs.c.lost + 1, lease_expires_at=None, reason=reason),
                                   returning=cols)
             abandoned = self._move(conn, Transition.ABANDON, JobState.ERROR,
-                                   [*where, started, jobs.c.lost + 1 >= max_lost],
+                                   [*where, jobs.c.lost + 1 >= max_lost],
                                    dict(lost=jobs.c.lost + 1, lease_expires_at=None, finished_at=now,
                                         reason=f"{reason} {max_lost} times; the job keeps losing its worker"),
                                    returning=cols)

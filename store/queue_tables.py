@@ -48,7 +48,7 @@ jobs = Table(
     Column("status", String(16), nullable=False),
     Column("attempts", Integer, nullable=False, default=0),   # attempts started; the lease's fencing token
     Column("retried", Integer, nullable=False, default=0),    # attempts repeated after an infrastructure error
-    Column("lost", Integer, nullable=False, default=0),       # attempts whose lease expired
+    Column("lost", Integer, nullable=False, default=0),       # started attempts whose holder was lost
     Column("worker_id", String(255)),
     Column("worker_host", String(255)),
     Column("worker_pid", Integer),
@@ -74,7 +74,7 @@ job_attempts = Table(
     Column("id", Integer, primary_key=True, autoincrement=True),
     Column("job_id", Integer, ForeignKey("jobs.id", ondelete="CASCADE"), nullable=False),
     Column("attempt", Integer, nullable=False),
-    # a job state for attempts that ended with a verdict, or "lost" when the lease expired
+    # a job state for attempts that ended with a verdict, or "lost" when the holder of a started one was lost
     Column("outcome", String(16), nullable=False),
     Column("exit_code", Integer),
     Column("started_at", Float),

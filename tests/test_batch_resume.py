@@ -72,6 +72,7 @@ def test_kill_9_mid_batch_then_resume_runs_each_job_once(tmp_path):
     assert any(j.status is JobState.QUEUED for j in before)
     held = {j.name for j in before if j.status is JobState.RUNNING and j.child_pid is None}
     started = {j.name for j in before if j.status is JobState.RUNNING and j.child_pid is not None}
+    assert held, "no job was held without a recorded start"
 
     resumed = run_cli(["-o", "results", "--resume", "-j", "4", "--", *child_command(child)], tmp_path, env)
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr

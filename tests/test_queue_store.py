@@ -13,7 +13,7 @@ from batch_fixtures import sqlite_url
 from store import states
 from store.database import StoreError, ensure_schema, open_engine
 from store.jobs import BatchOptions, JobResult, JobSpec, WorkerIdentity
-from store.queue import LeaseLost, QueueStore
+from store.queue import UNCHARGED_CLAIMS, LeaseLost, QueueStore
 from store.queue_tables import QUEUE_TABLES
 from store.states import JobState, Transition, TransitionError
 
@@ -130,6 +130,26 @@ def test_a_job_taken_back_before_it_started_is_not_charged_with_a_lost_attempt(s
         assert [a["outcome"] for a in store.attempts(jobs["j0"].id)] == ["lost"] * 3
         [again] = store.claim(_worker("last"), batch_id=batch.id)
         assert again.name == "j1" and again.attempts == 4 and again.child_pid is None
+    finally:
+        store.close()
+
+
+def test_a_job_whose_holder_is_always_lost_before_its_start_is_recorded_still_ends(store_url):
+    """A job whose every run ends its runner at once (before its start is written) is not retried for
+    ever: from its UNCHARGED_CLAIMS-th claim on a loss is charged, and the third charged one ends it."""
+    store, batch = _store(store_url, count=1)
+    try:
+        claims = 0
+        while True:
+            [job] = store.claim(_worker("victim"), batch_id=batch.id)
+            claims += 1
+            [taken] = store.reclaim_worker("victim-id", "the runner ended")
+            if taken.status is JobState.ERROR:
+                break
+            assert claims < 50
+        [job] = store.jobs(batch.id)
+        assert claims == UNCHARGED_CLAIMS + 2 and job.lost == 3 and "keeps losing its worker" in job.reason
+        assert [a["outcome"] for a in store.attempts(job.id)] == ["lost"] * 3
     finally:
         store.close()
 

@@ -134,8 +134,8 @@ def test_killed_worker_jobs_are_reclaimed_after_lease_expiry(store_url, tmp_path
                        tmp_path, {**env, "SCENARIO_WORKER_HOST": "lost-host"})
     store = QueueStore.open(store_url)
     try:
-        deadline = time.monotonic() + 30
-        while not any(j.worker_host == "lost-host" for j in store.running()):
+        deadline = time.monotonic() + 30       # (a loss is charged to a job only once its start is recorded)
+        while not any(j.worker_host == "lost-host" and j.child_pid for j in store.running()):
             assert time.monotonic() < deadline and victim.poll() is None
             time.sleep(0.02)
         survivor = start_cli(["worker", "--store", store_url, "-j", "2", "--lease", "3", "--poll", "0.1"],

@@ -27,9 +27,10 @@ enough for the gathering not to leave a slot idle (measured side by side, 2,000 
 1.23-1.46 ms of the batch process's CPU per job before, 0.87-1.08 ms after; the wall time no longer).
 The server stamps each start and end with its clock (``time.monotonic``), so a job's times and its
 ``--timeout`` do not depend on when the loop read them. The gathering is bounded by the socket too
-(:data:`REPLY_ROOM`): the server never waits to send a reply. The depth is bounded because the
-store cannot tell a job held ahead from one started: after a ``kill -9`` each job the runner held
-counts a lost attempt when ``--resume`` takes it back (and one lost three times ends as an error).
+(:data:`REPLY_ROOM`): the server never waits to send a reply. After a ``kill -9`` the jobs held ahead
+go back to the queue uncharged (the store has no start recorded for them, see
+``QueueStore._reclaim``); the depth is bounded all the same, as those jobs wait for a ``--resume`` or
+for another worker's sweep.
 
 A single-host batch also claims in chunks (:meth:`HandOver.claim_limit`): at least
 :data:`CLAIM_CHUNK` jobs per claim, held by the worker (claimed, not started) until a slot frees, so

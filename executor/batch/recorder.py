@@ -40,7 +40,8 @@ if TYPE_CHECKING:
 
 #: Seconds a job's child runs before its process id is written to the store. A short job ends sooner:
 #: its result is then written alone. The record serves to end the child of a runner that died together
-#: with its watchdog, which matters for long jobs.
+#: with its watchdog, which matters for long jobs, and it is what makes a lost holder cost the job an
+#: attempt (``QueueStore._reclaim``: a job without it goes back uncharged): raising this widens that window.
 STARTED_RECORD_AFTER = 0.1
 
 #: Seconds the oldest unwritten result waits for others to share its transaction.

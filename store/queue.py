@@ -28,18 +28,13 @@ from store.driver_statements import DriverStatement
 from store.jobs import Batch, BatchOptions, Job, JobEnd, JobResult, JobSpec, Reclaimed, WorkerIdentity
 from store.queue_reads import QueueReads
 from store.queue_tables import QUEUE_TABLES, batches, job_attempts, jobs
-from store.states import JobState, Transition
+from store.states import UNCHARGED_CLAIMS, JobState, Transition
 
 #: Seconds a claim holds a job without a heartbeat.
 DEFAULT_LEASE = 60.0
 
 #: Lease expirations after which a job ends as ``error`` instead of being queued again.
 DEFAULT_MAX_LOST = 3
-
-#: Claims of a job within which a holder lost before the job's start was recorded costs the job nothing
-#: (see ``QueueStore._reclaim``); from this claim on such a loss is charged like any other, so a job whose
-#: every run ends its runner before the start is recorded still ends as an error, after a dozen tries.
-UNCHARGED_CLAIMS = 10
 
 #: The columns the record of an attempt is written with (see ``QueueStore._end``).
 _ATTEMPT_KEYS = ("job_id", "attempt", "outcome", "exit_code", "started_at", "finished_at", "worker_id", "host",
@@ -295,7 +290,7 @@ class QueueStore(QueueReads):
         happened, and three such kills would end a job that never ran as an error. A start is recorded
         :data:`~executor.batch.recorder.STARTED_RECORD_AFTER` after it (a job that ends sooner has its
         result written instead), so a holder lost within that time of a start is not charged either;
-        from the :data:`UNCHARGED_CLAIMS`-th claim of a job on, every loss is.
+        from the :data:`~store.states.UNCHARGED_CLAIMS`-th claim of a job on, every loss is.
         """
         cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
                 jobs.c.lost]

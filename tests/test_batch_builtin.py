@@ -170,6 +170,46 @@ def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, la
     assert all(runs[f"k{int(job[3:])}"] == 1 for job in finished), "a finished job ran again"
 
 
+def _fork_servers(pid: int) -> list[int]:
+    """The fork servers among the children of process ``pid``."""
+    try:
+        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    except OSError:
+        return []
+    found = []
+    for child in children:
+        try:
+            if b"executor.batch.fork_server" in Path(f"/proc/{child}/cmdline").read_bytes():
+                found.append(int(child))
+        except OSError:
+            pass
+    return found
+
+
+def test_jobs_waiting_at_a_fork_server_that_died_run_on_the_next_one(tmp_path):
+    """The fork server is killed while it runs two jobs and holds more for the next free slots: the two
+    end as errors, the ones it held never ran, so they go back to the queue and run on a new server."""
+    names = [f"s{i:02}" for i in range(30)]
+    env = make_variants(tmp_path, names, pause=0.3)
+    runner = start_cli(["-i", "out", "-o", "res", "-j", "2"], tmp_path, env)
+    deadline = time.monotonic() + 60
+    while len(records(tmp_path)) < 2 or not _fork_servers(runner.pid):
+        assert time.monotonic() < deadline and runner.poll() is None, runner.stdout.read()
+        time.sleep(0.02)
+    [server] = _fork_servers(runner.pid)
+    os.kill(server, signal.SIGKILL)
+    out = runner.communicate(timeout=120)[0]
+    with sqlite3.connect(tmp_path / ".scenario_store.db") as conn:
+        ends = conn.execute("SELECT name, status, reason FROM jobs ORDER BY seq").fetchall()
+    errors = [(name, reason) for name, status, reason in ends if status == "error"]
+    assert len(ends) == 30 and len(errors) <= 2, (errors, out)          # only the jobs it was running
+    assert all(status in ("passed", "error") for _name, status, _reason in ends), ends
+    assert runner.returncode == (1 if errors else 0), out
+    assert not any("fork server ended" in (reason or "") for _name, reason in errors), errors
+    ran = [row[0] for row in records(tmp_path)]
+    assert sorted(set(ran)) == sorted(ran) and len(ran) >= 30 - len(errors), ran   # none ran twice
+
+
 def _finished_jobs(root: Path) -> set[str]:
     """Jobs with a verdict in the store (a resume must not run them again)."""
     with sqlite3.connect(root / ".scenario_store.db") as conn:

@@ -13,9 +13,9 @@ from batch_fixtures import sqlite_url
 from store import states
 from store.database import StoreError, ensure_schema, open_engine
 from store.jobs import BatchOptions, JobResult, JobSpec, WorkerIdentity
-from store.queue import UNCHARGED_CLAIMS, LeaseLost, QueueStore
+from store.queue import LeaseLost, QueueStore
 from store.queue_tables import QUEUE_TABLES
-from store.states import JobState, Transition, TransitionError
+from store.states import UNCHARGED_CLAIMS, JobState, Transition, TransitionError
 
 pytest_plugins = ["batch_stores"]            # the store_url and pg_url fixtures
 

@@ -21,6 +21,7 @@ from executor.batch.job_run import Done, StartOrder, failed_attempt, not_started
 from executor.batch.loop_run import Events, LoopRun
 from executor.children.process import kill_orphan
 from store.jobs import Batch, Job
+from store.states import UNCHARGED_CLAIMS
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,9 @@ class ForkedRun(LoopRun):
             return [self._not_started()]
         if event == "failed":
             return [self._failed(message)]
-        if self.pid is None:                       # "gone" before the start
+        if self.pid is None:                       # "gone" before the start: the job never ran
+            if self.job.attempts < UNCHARGED_CLAIMS:
+                return [self._not_started()]       # back to the queue, for the next fork server
             return [self._failed({"reason": "the fork server ended"})]
         kill_orphan(self.pid, self.server.mark)    # its parent is gone: nobody else can wait for it
         return self._on_exited(-signal.SIGKILL)

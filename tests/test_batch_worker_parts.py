@@ -191,6 +191,24 @@ def test_a_retry_queues_the_job_again_and_wakes_the_claims_and_a_failure_halts_i
     assert any("halting: 2 job(s)" in w for w in parts.warnings)
 
 
+def test_a_job_given_back_to_a_batch_halted_meanwhile_is_halted_too(store):
+    """A job held unstarted while its batch halted (waiting at a fork server that ended, say) goes back to
+    the queue after the halt: halting again cancels it, as nothing claims from a halted batch."""
+    halting = _batch(store, 3, halt=True)
+    me = WorkerIdentity.current()
+    failing, held = store.claim(me, limit=2, batch_id=halting.id)
+    parts = Recorded(store)
+    parts.recorder.add(_done(failing, halting, JobState.FAILED), time.monotonic())
+    parts.recorder.flush(time.monotonic())
+    assert parts.recorder.halted(halting.id)
+    assert store.release(me, [held.id]) == 1
+    assert store.counts(halting.id)[JobState.QUEUED] == 1           # a job the halt could not reach
+    parts.recorder.halt_again()
+    counts = store.counts(halting.id)
+    assert (counts[JobState.FAILED], counts[JobState.CANCELLED], counts[JobState.QUEUED]) == (1, 2, 0)
+    assert sum("halting" in w for w in parts.warnings) == 1          # said once
+
+
 def test_a_start_is_recorded_only_for_a_job_still_running_after_a_while(store):
     batch = _batch(store, 2)
     short, long_ = store.claim(WorkerIdentity.current(), limit=2, batch_id=batch.id)

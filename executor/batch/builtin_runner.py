@@ -31,6 +31,7 @@ import sys
 import tempfile
 import threading
 from collections.abc import Callable, Mapping, Sequence
+from errno import ECONNRESET, ENOTCONN, EPIPE
 from typing import BinaryIO
 
 from executor.batch.fork_protocol import MAX_MESSAGE, bundles, command_target, receive, send
@@ -77,6 +78,14 @@ def forkers_for(slots: int) -> int:
 
 class ForkServerError(OSError):
     """The fork server could not be started, or ended."""
+
+
+class ForkServerEnded(ForkServerError):
+    """The fork server ended before it forked the job: the job never ran (it may run on the next server)."""
+
+
+#: What a send to a server that has died meanwhile fails with (before its end has been read).
+_PEER_GONE = frozenset({EPIPE, ECONNRESET, ENOTCONN})
 
 
 class JobFolderRefused(ForkServerError):
@@ -214,7 +223,7 @@ class ForkServer:
         with self._lock:
             if not self._alive or self._sock is None:
                 self._forget(request_id)
-                raise ForkServerError("the built-in runner's fork server has ended")
+                raise ForkServerEnded("the built-in runner's fork server has ended")
             if ticket is not None and not ticket.on_withdraw(lambda: self._withdraw(request_id)):
                 self._forget(request_id)
                 return None
@@ -226,15 +235,19 @@ class ForkServer:
                 self._send(request, None if output_fd is None else [output_fd])
             except OSError as exc:                         # (a ForkServerError too)
                 self._forget(request_id)
+                if isinstance(exc, ForkServerEnded) or exc.errno in _PEER_GONE or not self._alive:
+                    raise ForkServerEnded(f"the built-in runner's fork server is gone: {exc}") from exc
                 if isinstance(exc, ForkServerError):
                     raise
-                raise ForkServerError(f"the built-in runner's fork server is gone: {exc}") from exc
+                raise ForkServerError(f"the built-in runner cannot send the job to its fork server: {exc}") from exc
         if ticket is not None:
             ticket.sent()
         pending.event.wait()
         if pending.withdrawn:
             return None
         if pending.pid is None:
+            if pending.gone:
+                raise ForkServerEnded(f"the built-in runner could not start the job: {pending.reason}")
             raise start_failure(pending.reason, pending.errno, pending.folder_refused)
         process = ForkedProcess(pending.pid, stdout)
         with self._table_lock:
@@ -260,7 +273,7 @@ class ForkServer:
         reader thread once a thread waits in :meth:`spawn`) with each of the server's messages on the
         request, in order: ``started`` (``pid``), ``failed`` (``reason``, ``errno``, ``folder``) or ``withdrawn``, then
         ``exited`` (the raw wait ``status``); ``{"event": "gone"}`` when the server ended before it could
-        say more (a job it had started was killed with it). :class:`ForkServerError` when the request
+        say more (a job it had started was killed with it). :class:`ForkServerEnded` when the request
         cannot be sent (the server ended before)."""
         request_id = str(next(self._ids))
         with self._table_lock:
@@ -271,7 +284,7 @@ class ForkServer:
             if not self._alive or self._sock is None:
                 with self._table_lock:
                     self._replies.pop(request_id, None)
-                raise ForkServerError("the built-in runner's fork server has ended")
+                raise ForkServerEnded("the built-in runner's fork server has ended")
             self._outbox[request_id] = json.dumps(request).encode()
             if not later:
                 self._send_kept()
@@ -296,9 +309,13 @@ class ForkServer:
                 self._send(message)
                 sent += count
         except OSError as exc:                       # (a ForkServerError: it ended meanwhile)
-            if self._alive:
-                self._answer_unsent([request_id for request_id, _request in kept[sent:]],
-                                    {"event": "failed", "reason": f"its request could not be sent: {exc.strerror or exc}"})
+            if self._alive:                          # (else its end answered them: "gone")
+                unsent = [request_id for request_id, _request in kept[sent:]]
+                if exc.errno in _PEER_GONE:          # it died, its end not read yet: as its end would
+                    self._answer_unsent(unsent, {"event": "gone"})
+                else:
+                    self._answer_unsent(unsent, {"event": "failed",
+                                                 "reason": f"its request could not be sent: {exc.strerror or exc}"})
 
     def _answer_unsent(self, request_ids: list[str], answer: dict) -> None:
         """Answer requests the server never got (``failed``, ``withdrawn``) as it would have."""
@@ -343,7 +360,7 @@ class ForkServer:
                 return
             except BlockingIOError:
                 if self._reader is None and not self._drain():
-                    raise ForkServerError("the built-in runner's fork server has ended") from None
+                    raise ForkServerEnded("the built-in runner's fork server has ended") from None
                 select.select([], [self._sock], [], 0.05)
 
     def _ensure_reader(self) -> None:
@@ -418,6 +435,7 @@ class ForkServer:
             reply({"event": "gone"})
         for item in pending:
             item.reason = "the fork server ended"
+            item.gone = True
             item.event.set()
         for process in running:            # their parent is gone: nobody else can wait for them
             kill_orphan(process.pid, self.mark)

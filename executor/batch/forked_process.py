@@ -46,3 +46,4 @@ class Pending:
         self.errno: int | None = None              # why the server could not start it, as an OSError's
         self.folder_refused = False                # … because the job's folder could not be made
         self.withdrawn = False
+        self.gone = False                          # the server ended before it answered

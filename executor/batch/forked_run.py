@@ -16,12 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.results.files import LOG_FILE
-from executor.batch.builtin_runner import ForkServer, start_failure
-from executor.batch.job_run import Done, StartOrder, failed_attempt, not_started
+from executor.batch.builtin_runner import ForkServer, ForkServerEnded, start_failure
+from executor.batch.job_run import Done, StartOrder, failed_attempt, goes_back_unstarted, not_started
 from executor.batch.loop_run import Events, LoopRun
 from executor.children.process import kill_orphan
 from store.jobs import Batch, Job
-from store.states import UNCHARGED_CLAIMS
 
 
 @dataclass(frozen=True)
@@ -45,9 +44,12 @@ class ForkedRun(LoopRun):
         self._request: str | None = None
 
     def _launch(self, argv: Sequence[str], environment: Mapping[str, str]) -> Events:
-        self._request = self.server.submit(argv, cwd=self.cwd, environment=environment,
-                                           log_path=os.path.join(os.path.abspath(self.output_dir), LOG_FILE), append=False,
-                                           log_folder=self.folder_root, reply=self._reply, later=True)
+        try:
+            self._request = self.server.submit(argv, cwd=self.cwd, environment=environment,
+                                               log_path=os.path.join(os.path.abspath(self.output_dir), LOG_FILE),
+                                               append=False, log_folder=self.folder_root, reply=self._reply, later=True)
+        except ForkServerEnded:
+            return [self._server_ended()]
         return []
 
     def _reply(self, message: dict) -> None:
@@ -68,9 +70,7 @@ class ForkedRun(LoopRun):
         if event == "failed":
             return [self._failed(message)]
         if self.pid is None:                       # "gone" before the start: the job never ran
-            if self.job.attempts < UNCHARGED_CLAIMS:
-                return [self._not_started()]       # back to the queue, for the next fork server
-            return [self._failed({"reason": "the fork server ended"})]
+            return [self._server_ended()]
         kill_orphan(self.pid, self.server.mark)    # its parent is gone: nobody else can wait for it
         return self._on_exited(-signal.SIGKILL)
 
@@ -78,6 +78,13 @@ class ForkedRun(LoopRun):
         """A job the server could not start: the result the thread path gives the same failure."""
         failure = start_failure(message.get("reason"), message.get("errno"), bool(message.get("folder")))
         return self._done(failed_attempt(self.output_dir, time.time(), failure))
+
+    def _server_ended(self) -> Done:
+        """The server ended before it forked the job: the job never ran, and goes back to the queue for
+        the next server (as not started), within its first ``UNCHARGED_CLAIMS`` claims."""
+        if goes_back_unstarted(self.job):
+            return self._not_started()
+        return self._failed({"reason": "the fork server ended"})
 
     def _not_started(self) -> Done:
         return self._done(not_started(self.output_dir, self._kept_log, False, self.lost))

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import BinaryIO, Protocol
 
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
-from executor.batch.builtin_runner import BUILTIN_COMMAND, JobFolderRefused
+from executor.batch.builtin_runner import BUILTIN_COMMAND, ForkServerEnded, JobFolderRefused
 from executor.batch.inputs import not_utf8_reason
 from executor.batch.launch_template import Launch, substitute
 from executor.batch.verdict import (
@@ -29,7 +29,7 @@ from executor.batch.verdict import (
 from executor.children.hooks import run_post_hooks
 from executor.children.process import ChildProcess, Launcher, disk_full
 from store.jobs import Batch, Job, JobResult
-from store.states import NOT_STARTED_REASON, JobState
+from store.states import NOT_STARTED_REASON, UNCHARGED_CLAIMS, JobState
 
 
 class Attempt(Protocol):
@@ -114,6 +114,13 @@ def undo_folder(output_dir: Path, kept_log: Path | None, made_folder: bool) -> N
             output_dir.rmdir()
     except OSError:
         pass                                     # not empty (someone wrote there): leave it
+
+
+def goes_back_unstarted(job: Job) -> bool:
+    """Whether an attempt of ``job`` whose fork server ended before it forked the job goes back to the
+    queue (as not started, to run on the next server: it never ran), rather than ending as a failure to
+    start: within the job's first :data:`~store.states.UNCHARGED_CLAIMS` claims."""
+    return job.attempts < UNCHARGED_CLAIMS
 
 
 def not_started(output_dir: Path, kept_log: Path | None, made_folder: bool, lost: bool) -> JobResult:
@@ -309,6 +316,10 @@ class JobRun:
         # that a cancel meanwhile takes it back (start() then returns None)
         try:
             pid = None if cancelled else child.start()
+        except ForkServerEnded:
+            if not goes_back_unstarted(self.job):
+                raise
+            pid = None                            # it never ran: back to the queue, for the next server
         finally:
             self.pass_turn()                      # (when the launcher had it, the turn passed already)
         if pid is None:                           # cancelled before it started

@@ -99,6 +99,12 @@ class ResultRecorder:
     def halted(self, batch_id: int) -> bool:
         return batch_id in self._halted
 
+    def halt_again(self) -> None:
+        """Halt the batches halted before once more: jobs given back to their queue since (never started)
+        would wait there for ever, as a halted batch is claimed from no more."""
+        for batch_id in sorted(self._halted):
+            self.store.halt(batch_id)
+
     def add(self, event: Started | Done, now: float) -> None:
         """Keep an event that came at ``now``; a job's result makes its unwritten start record pointless."""
         job_id = event.run.job.id

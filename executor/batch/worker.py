@@ -216,9 +216,12 @@ class Worker:
             self._taken_back.clear()
 
     def _give_back_taken(self) -> None:
-        """Give the jobs a stop took back before their start (claimed and not handed over, or withdrawn
-        from the fork server) back to the queue, all in one store statement, under the back-off."""
+        """Give the jobs taken back before their start back to the queue, all in one store statement,
+        under the back-off: a stop's (claimed and not handed over, or withdrawn from the fork server) and
+        those a fork server ended before forking them. In a batch halted meanwhile they are halted too
+        (nothing claims from it any more)."""
         self.store.release(self.identity, self._taken_back)
+        self.recorder.halt_again()
         self._taken_back.clear()
 
     def _store_step(self, step: Callable[[], None]) -> bool:

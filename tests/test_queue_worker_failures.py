@@ -86,6 +86,20 @@ def test_claimed_jobs_are_given_back_when_the_store_fails_while_starting_them(pg
     assert ledger(tmp_path) == {n: 1 for n in names}
 
 
+def _shut_gate(admin, when: str) -> None:
+    """A trigger (``when``: its timing, table and condition) that fails the statement like a lost
+    connection until a row ``INSERT INTO gate VALUES (true)`` opens the gate."""
+    admin.execute("CREATE TABLE gate (open boolean)")
+    admin.execute("""CREATE FUNCTION shut_gate() RETURNS trigger LANGUAGE plpgsql AS $$
+        BEGIN
+          IF NOT EXISTS (SELECT 1 FROM gate WHERE open) THEN
+            RAISE EXCEPTION 'server closed the connection unexpectedly (test)';
+          END IF;
+          RETURN NEW;
+        END $$""")
+    admin.execute(f"CREATE TRIGGER shut_gate {when} EXECUTE FUNCTION shut_gate()")
+
+
 @pytest.mark.slow
 def test_results_the_store_refuses_for_a_while_are_kept_and_written_once_it_takes_them(pg_url, tmp_path):
     """Recording a job's end fails like a lost connection until a gate opens: the worker keeps the results
@@ -97,16 +111,7 @@ def test_results_the_store_refuses_for_a_while_are_kept_and_written_once_it_take
     _enqueue(tmp_path, pg_url, {n: "" for n in names}, env)
     database = pg_url.rsplit("/", 1)[1]
     with psycopg.connect(f"postgresql://postgres@127.0.0.1:5432/{database}", autocommit=True) as admin:
-        admin.execute("CREATE TABLE gate (open boolean)")
-        admin.execute("""CREATE FUNCTION attempt_gate() RETURNS trigger LANGUAGE plpgsql AS $$
-            BEGIN
-              IF NOT EXISTS (SELECT 1 FROM gate WHERE open) THEN
-                RAISE EXCEPTION 'server closed the connection unexpectedly (test)';
-              END IF;
-              RETURN NEW;
-            END $$""")
-        admin.execute("CREATE TRIGGER attempt_gate BEFORE INSERT ON job_attempts "
-                      "FOR EACH ROW EXECUTE FUNCTION attempt_gate()")
+        _shut_gate(admin, "BEFORE INSERT ON job_attempts FOR EACH ROW")
         worker = start_cli(["worker", "--store", pg_url, "-j", "3", "--poll", "0.1", "--lease", "60"],
                            tmp_path, env)
         deadline = time.monotonic() + 30
@@ -144,16 +149,7 @@ def test_a_stop_gives_back_the_jobs_it_held_once_the_store_takes_them_again(pg_u
         while sum(ledger(tmp_path).values()) < 2:            # it runs, and holds the next jobs
             assert time.monotonic() < deadline and runner.poll() is None
             time.sleep(0.05)
-        admin.execute("CREATE TABLE gate (open boolean)")
-        admin.execute("""CREATE FUNCTION requeue_gate() RETURNS trigger LANGUAGE plpgsql AS $$
-            BEGIN
-              IF NOT EXISTS (SELECT 1 FROM gate WHERE open) THEN
-                RAISE EXCEPTION 'server closed the connection unexpectedly (test)';
-              END IF;
-              RETURN NEW;
-            END $$""")
-        admin.execute("CREATE TRIGGER requeue_gate BEFORE UPDATE ON jobs FOR EACH ROW "
-                      "WHEN (OLD.status = 'running' AND NEW.status = 'queued') EXECUTE FUNCTION requeue_gate()")
+        _shut_gate(admin, "BEFORE UPDATE ON jobs FOR EACH ROW WHEN (OLD.status = 'running' AND NEW.status = 'queued')")
         held = admin.execute("SELECT count(*) FROM jobs WHERE status = 'running'").fetchone()[0]
         assert held > 2, "the runner held no job beyond its two slots"
         runner.send_signal(signal.SIGINT)

@@ -261,15 +261,23 @@ class QueueStore(QueueReads):
                                    func.coalesce(jobs.c.reason, "") != states.UNTIL_FAIL_REASON],
                                   dict(reason=None)))
 
-    def release(self, worker: WorkerIdentity, job_ids: Iterable[int]) -> int:
-        """Give back jobs ``worker`` holds but never started (a claim whose commit reply was lost)."""
+    def release(self, worker: WorkerIdentity, job_ids: Iterable[int], *, halted: Iterable[int] = ()) -> int:
+        """Give back jobs ``worker`` holds but never started (a claim whose commit reply was lost, a stop,
+        a fork server that ended before forking them); returns how many. Those of them in ``halted``
+        belong to a batch halted meanwhile (``--halt-on-failure``): they are cancelled in the same
+        transaction, as the halt cancelled its other jobs, rather than left queued where nothing claims."""
         ids = sorted(job_ids)
         if not ids:
             return 0
         with self._tx() as conn:
-            return len(self._move(conn, Transition.RECLAIM, JobState.QUEUED,
-                                  [jobs.c.worker_id == worker.id, jobs.c.id.in_(ids)],
-                                  dict(lease_expires_at=None, reason="released unstarted")))
+            count = len(self._move(conn, Transition.RECLAIM, JobState.QUEUED,
+                                   [jobs.c.worker_id == worker.id, jobs.c.id.in_(ids)],
+                                   dict(lease_expires_at=None, reason="released unstarted")))
+            halted_ids = sorted(set(halted) & set(ids))
+            if halted_ids:
+                self._move(conn, Transition.HALT, JobState.CANCELLED, [jobs.c.id.in_(halted_ids)],
+                           dict(reason=states.HALT_REASON))
+            return count
 
     def reclaim_expired(self, max_lost: int = DEFAULT_MAX_LOST, now: float | None = None) -> list[Reclaimed]:
         """Take back running jobs whose lease expired: queue them again, or end them as ``error``."""
@@ -290,7 +298,7 @@ class QueueStore(QueueReads):
         happened, and three such kills would end a job that never ran as an error. A start is recorded
         :data:`~executor.batch.recorder.STARTED_RECORD_AFTER` after it (a job that ends sooner has its
         result written instead), so a holder lost within that time of a start is not charged either;
-        from the :data:`~store.states.UNCHARGED_CLAIMS`-th claim of a job on, every loss is.
+        after a job's first :data:`~store.states.UNCHARGED_CLAIMS` claims every loss is.
         """
         cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
                 jobs.c.lost]
@@ -298,7 +306,7 @@ class QueueStore(QueueReads):
         out: list[Reclaimed] = []
         with self._tx() as conn:
             returned = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
-                                  [*where, jobs.c.child_pid.is_(None), jobs.c.attempts < UNCHARGED_CLAIMS],
+                                  [*where, jobs.c.child_pid.is_(None), jobs.c.attempts <= UNCHARGED_CLAIMS],
                                   dict(lease_expires_at=None, reason=f"{reason} before it started"),
                                   returning=cols)
             # (the jobs left running among ``where`` are the ones charged)

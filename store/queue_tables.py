@@ -48,7 +48,7 @@ jobs = Table(
     Column("status", String(16), nullable=False),
     Column("attempts", Integer, nullable=False, default=0),   # attempts started; the lease's fencing token
     Column("retried", Integer, nullable=False, default=0),    # attempts repeated after an infrastructure error
-    Column("lost", Integer, nullable=False, default=0),       # started attempts whose holder was lost
+    Column("lost", Integer, nullable=False, default=0),       # attempts whose holder was lost, charged
     Column("worker_id", String(255)),
     Column("worker_host", String(255)),
     Column("worker_pid", Integer),

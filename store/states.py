@@ -30,10 +30,11 @@ FINAL = frozenset({JobState.PASSED, JobState.FAILED, JobState.ERROR, JobState.TI
 #: States a batch still has work in (``cancelled`` jobs are run again by ``--resume``).
 UNFINISHED = frozenset({JobState.QUEUED, JobState.RUNNING, JobState.CANCELLED})
 
-#: Claims of a job within which losing it before its start costs it nothing: a holder lost before the
-#: job's start was recorded (``QueueStore._reclaim``), a fork server that ended before it forked the job
-#: (``ForkedRun``); the job goes back to the queue. From this claim on such a loss is charged like any
-#: other, so a job whose every try ends its runner or server at once still ends, after about a dozen tries.
+#: The first claims of a job, within which losing it before its start costs it nothing: a holder lost
+#: before the job's start was recorded (``QueueStore._reclaim``), a fork server that ended before it
+#: forked the job (``job_run.goes_back_unstarted``); the job goes back to the queue. After them such a
+#: loss is charged like any other, so a job whose every try ends its runner or server at once still ends,
+#: after about a dozen tries.
 UNCHARGED_CLAIMS = 10
 
 

@@ -191,22 +191,27 @@ def test_a_retry_queues_the_job_again_and_wakes_the_claims_and_a_failure_halts_i
     assert any("halting: 2 job(s)" in w for w in parts.warnings)
 
 
-def test_a_job_given_back_to_a_batch_halted_meanwhile_is_halted_too(store):
-    """A job held unstarted while its batch halted (waiting at a fork server that ended, say) goes back to
-    the queue after the halt: halting again cancels it, as nothing claims from a halted batch."""
-    halting = _batch(store, 3, halt=True)
+def test_a_job_given_back_to_a_batch_halted_meanwhile_is_cancelled_and_a_resumed_batch_halts_again(store):
+    """A job held unstarted while its batch halted (waiting at a fork server that ended, say) goes back
+    after the halt: it is cancelled with the rest, not left queued where nothing claims. A batch claimed
+    from again after a halt was resumed: it can halt again."""
+    halting = _batch(store, 4, halt=True)
     me = WorkerIdentity.current()
     failing, held = store.claim(me, limit=2, batch_id=halting.id)
     parts = Recorded(store)
     parts.recorder.add(_done(failing, halting, JobState.FAILED), time.monotonic())
     parts.recorder.flush(time.monotonic())
-    assert parts.recorder.halted(halting.id)
-    assert store.release(me, [held.id]) == 1
-    assert store.counts(halting.id)[JobState.QUEUED] == 1           # a job the halt could not reach
-    parts.recorder.halt_again()
+    assert parts.recorder.halted(halting.id) and store.counts(halting.id)[JobState.CANCELLED] == 2
+    assert store.release(me, [held.id], halted=[held.id]) == 1
     counts = store.counts(halting.id)
-    assert (counts[JobState.FAILED], counts[JobState.CANCELLED], counts[JobState.QUEUED]) == (1, 2, 0)
-    assert sum("halting" in w for w in parts.warnings) == 1          # said once
+    assert (counts[JobState.FAILED], counts[JobState.CANCELLED], counts[JobState.QUEUED]) == (1, 3, 0)
+    assert store.resume(halting.id) == 3
+    again = store.claim(me, limit=2, batch_id=halting.id)
+    parts.recorder.claimed_from({job.batch_id for job in again})
+    assert not parts.recorder.halted(halting.id)
+    parts.recorder.add(_done(again[0], halting, JobState.FAILED), time.monotonic())
+    parts.recorder.flush(time.monotonic())
+    assert parts.halted == [halting.id, halting.id] and store.counts(halting.id)[JobState.CANCELLED] == 1
 
 
 def test_a_start_is_recorded_only_for_a_job_still_running_after_a_while(store):

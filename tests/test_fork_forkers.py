@@ -27,8 +27,9 @@ from batch_fixtures import alive, marked, wait_until_unmarked
 from probe_variants import make_variants, records
 from tests_schema import assert_valid
 
-from executor.batch.builtin_runner import SLOTS_PER_FORKER, ForkServer, ForkServerError, forkers_for
+from executor.batch.builtin_runner import SLOTS_PER_FORKER, ForkServer, forkers_for
 from executor.batch.fork_dispatch import Dispatcher, Forker
+from executor.batch.fork_errors import ForkServerError
 from executor.batch.fork_protocol import MAX_MESSAGE, bundles, receive
 from executor.children.process import kill_orphan
 

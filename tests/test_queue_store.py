@@ -136,7 +136,7 @@ def test_a_job_taken_back_before_it_started_is_not_charged_with_a_lost_attempt(s
 
 def test_a_job_whose_holder_is_always_lost_before_its_start_is_recorded_still_ends(store_url):
     """A job whose every run ends its runner at once (before its start is written) is not retried for
-    ever: from its UNCHARGED_CLAIMS-th claim on a loss is charged, and the third charged one ends it."""
+    ever: after its first UNCHARGED_CLAIMS claims a loss is charged, and the third charged one ends it."""
     store, batch = _store(store_url, count=1)
     try:
         claims = 0
@@ -148,7 +148,7 @@ def test_a_job_whose_holder_is_always_lost_before_its_start_is_recorded_still_en
                 break
             assert claims < 50
         [job] = store.jobs(batch.id)
-        assert claims == UNCHARGED_CLAIMS + 2 and job.lost == 3 and "keeps losing its worker" in job.reason
+        assert claims == UNCHARGED_CLAIMS + 3 and job.lost == 3 and "keeps losing its worker" in job.reason
         assert [a["outcome"] for a in store.attempts(job.id)] == ["lost"] * 3
     finally:
         store.close()

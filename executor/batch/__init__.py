@@ -16,11 +16,11 @@
 ``job_run`` / ``job_folders``
     one attempt in a thread (jobs with ``--post-run`` hooks or an echoed output) and the job's own folder
     (with the scenario file the job runs there).
-``builtin_runner`` / ``forked_process`` / ``fork_server`` / ``fork_protocol`` / ``fork_child`` / ``fork_dispatch`` / ``worker_server``
+``builtin_runner`` / ``forked_process`` / ``fork_errors`` / ``fork_server`` / ``fork_protocol`` / ``fork_child`` / ``fork_dispatch`` / ``worker_server``
     the built-in runner: jobs forked from a server that has imported the runtime once (the worker's
-    handle on each), what a forked child does to become the job, the dispatcher that spreads the forks over several warm copies
-    of the server when a worker has many slots, and the server a worker starts (or the command line
-    launches early, before the batch is known).
+    handle on each, and what can go wrong with it), what a forked child does to become the job, the
+    dispatcher that spreads the forks over several warm copies of the server when a worker has many
+    slots, and the server a worker starts (or the command line launches early, before the batch is known).
 ``verdict``
     judging an attempt: how the child ended and the ``test.xml`` it left become a job state and a reason.
 ``junit_merge`` / ``batch_outcome`` / ``failure_summary``

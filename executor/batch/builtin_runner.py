@@ -31,9 +31,9 @@ import sys
 import tempfile
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from errno import ECONNRESET, ENOTCONN, EPIPE
 from typing import BinaryIO
 
+from executor.batch.fork_errors import PEER_GONE, ForkServerEnded, ForkServerError, start_failure
 from executor.batch.fork_protocol import MAX_MESSAGE, bundles, command_target, receive, send
 from executor.batch.forked_process import ForkedProcess, Pending
 from executor.children.process import RUNNER_ENV, StartTicket, kill_orphan
@@ -74,30 +74,6 @@ def forkers_for(slots: int) -> int:
     no more than one per that many usable cores (each forker is one more warm interpreter, and on few
     cores the jobs themselves are the bottleneck, not their forks)."""
     return max(1, min(-(-slots // SLOTS_PER_FORKER), usable_cpus() // SLOTS_PER_FORKER))
-
-
-class ForkServerError(OSError):
-    """The fork server could not be started, or ended."""
-
-
-class ForkServerEnded(ForkServerError):
-    """The fork server ended before it forked the job: the job never ran (it may run on the next server)."""
-
-
-#: What a send to a server that has died meanwhile fails with (before its end has been read).
-_PEER_GONE = frozenset({EPIPE, ECONNRESET, ENOTCONN})
-
-
-class JobFolderRefused(ForkServerError):
-    """The server could not make the job's folder (a full disk, a folder that leads elsewhere)."""
-
-
-def start_failure(reason: str | None, errno: int | None = None, folder: bool = False) -> ForkServerError:
-    """The error of a job the server could not start (its ``failed`` reply, or ``reason`` alone)."""
-    if folder:
-        return JobFolderRefused(errno, reason)
-    message = f"the built-in runner could not start the job: {reason}"
-    return ForkServerError(message) if errno is None else ForkServerError(errno, message)
 
 
 class ForkServer:
@@ -214,7 +190,9 @@ class ForkServer:
         """Fork a job running ``argv`` (``scenario_execution …``) with its output going to ``output_fd``, or
         to ``log_path``, which the server opens as the job starts (this process makes no file per job),
         after making its folder when ``log_folder`` says under which root (the root, its real path);
-        waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start."""
+        waits while the server runs ``limit`` jobs. None when ``ticket`` was withdrawn before the start.
+        :class:`ForkServerEnded` when the server ended before the start, another :class:`ForkServerError`
+        when it could not start the job."""
         self._ensure_reader()
         request_id = str(next(self._ids))
         pending = Pending()
@@ -233,12 +211,12 @@ class ForkServer:
             try:
                 self._send_kept()                          # those submitted before it go first
                 self._send(request, None if output_fd is None else [output_fd])
-            except OSError as exc:                         # (a ForkServerError too)
+            except OSError as exc:                         # (a ForkServerError too: ForkServerEnded when it had ended)
                 self._forget(request_id)
-                if isinstance(exc, ForkServerEnded) or exc.errno in _PEER_GONE or not self._alive:
-                    raise ForkServerEnded(f"the built-in runner's fork server is gone: {exc}") from exc
                 if isinstance(exc, ForkServerError):
                     raise
+                if exc.errno in PEER_GONE or not self._alive:
+                    raise ForkServerEnded(f"the built-in runner's fork server is gone: {exc}") from exc
                 raise ForkServerError(f"the built-in runner cannot send the job to its fork server: {exc}") from exc
         if ticket is not None:
             ticket.sent()
@@ -297,8 +275,8 @@ class ForkServer:
 
     def _send_kept(self) -> None:
         """Send the kept requests (holding ``_lock``). Should the server have ended, its end answered them
-        (``gone``, see :meth:`_ended`); those the socket refuses while it lives are answered here
-        (``failed``): the server never heard of them."""
+        (``gone``, see :meth:`_ended`); those the socket refuses are answered here: ``gone`` when the
+        server has just died (its end not read yet), else ``failed``; the server never heard of them."""
         if not self._outbox or not self._alive or self._sock is None:
             return
         kept = list(self._outbox.items())
@@ -311,14 +289,14 @@ class ForkServer:
         except OSError as exc:                       # (a ForkServerError: it ended meanwhile)
             if self._alive:                          # (else its end answered them: "gone")
                 unsent = [request_id for request_id, _request in kept[sent:]]
-                if exc.errno in _PEER_GONE:          # it died, its end not read yet: as its end would
+                if exc.errno in PEER_GONE:          # it died, its end not read yet: as its end would
                     self._answer_unsent(unsent, {"event": "gone"})
                 else:
                     self._answer_unsent(unsent, {"event": "failed",
                                                  "reason": f"its request could not be sent: {exc.strerror or exc}"})
 
     def _answer_unsent(self, request_ids: list[str], answer: dict) -> None:
-        """Answer requests the server never got (``failed``, ``withdrawn``) as it would have."""
+        """Answer requests the server never got (``failed``, ``withdrawn``, ``gone``) as it, or its end, would have."""
         with self._table_lock:
             replies = [(request_id, self._replies.pop(request_id, None)) for request_id in request_ids]
         for request_id, reply in replies:

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from coverage_engine.results.files import LOG_FILE
-from executor.batch.builtin_runner import ForkServer, ForkServerEnded, start_failure
+from executor.batch.builtin_runner import ForkServer
+from executor.batch.fork_errors import ForkServerEnded, start_failure
 from executor.batch.job_run import Done, StartOrder, failed_attempt, goes_back_unstarted, not_started
 from executor.batch.loop_run import Events, LoopRun
 from executor.children.process import kill_orphan

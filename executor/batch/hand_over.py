@@ -47,7 +47,8 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for
+from executor.batch.builtin_runner import ForkServer, forkers_for
+from executor.batch.fork_errors import ForkServerError
 from executor.batch.job_run import StartOrder
 from executor.batch.worker_server import worker_fork_server
 from store.jobs import Batch
@@ -94,7 +95,7 @@ class HandOver:
 
     def launcher(self) -> ForkServer:
         """The fork server, started on the first job that needs it (again if it ended);
-        :class:`~executor.batch.builtin_runner.ForkServerError` when it cannot start."""
+        :class:`~executor.batch.fork_errors.ForkServerError` when it cannot start."""
         if self._server is None or not self._server.alive:
             if self._server is not None:
                 self._server.close()

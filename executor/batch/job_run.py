@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import BinaryIO, Protocol
 
 from coverage_engine.results.files import COVERAGE_FILE, LOG_FILE, RESULT_FILE
-from executor.batch.builtin_runner import BUILTIN_COMMAND, ForkServerEnded, JobFolderRefused
+from executor.batch.builtin_runner import BUILTIN_COMMAND
+from executor.batch.fork_errors import ForkServerEnded, JobFolderRefused
 from executor.batch.inputs import not_utf8_reason
 from executor.batch.launch_template import Launch, substitute
 from executor.batch.verdict import (
@@ -120,7 +121,7 @@ def goes_back_unstarted(job: Job) -> bool:
     """Whether an attempt of ``job`` whose fork server ended before it forked the job goes back to the
     queue (as not started, to run on the next server: it never ran), rather than ending as a failure to
     start: within the job's first :data:`~store.states.UNCHARGED_CLAIMS` claims."""
-    return job.attempts < UNCHARGED_CLAIMS
+    return job.attempts <= UNCHARGED_CLAIMS
 
 
 def not_started(output_dir: Path, kept_log: Path | None, made_folder: bool, lost: bool) -> JobResult:

@@ -99,11 +99,10 @@ class ResultRecorder:
     def halted(self, batch_id: int) -> bool:
         return batch_id in self._halted
 
-    def halt_again(self) -> None:
-        """Halt the batches halted before once more: jobs given back to their queue since (never started)
-        would wait there for ever, as a halted batch is claimed from no more."""
-        for batch_id in sorted(self._halted):
-            self.store.halt(batch_id)
+    def claimed_from(self, batch_ids: set[int]) -> None:
+        """A batch this worker halted and claims from again was resumed (``--resume``, by another
+        process): it runs as before its halt, and may halt again."""
+        self._halted -= batch_ids
 
     def add(self, event: Started | Done, now: float) -> None:
         """Keep an event that came at ``now``; a job's result makes its unwritten start record pointless."""

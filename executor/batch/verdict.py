@@ -215,7 +215,8 @@ def judge(outcome: ProcessOutcome, output_dir: str | os.PathLike[str], mark: Fil
 
 def never_started(result: JobResult) -> bool:
     """Whether an attempt ended before its child started: cancelled (a stop) while it waited for its
-    turn or at the fork server. Its job goes back to the queue; nothing of it is recorded."""
+    turn or at the fork server, or its fork server ended first. Its job goes back to the queue; nothing
+    of it is recorded."""
     return result.status is JobState.CANCELLED and result.reason == NOT_STARTED_REASON
 
 

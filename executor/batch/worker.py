@@ -27,8 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError
+from executor.batch.builtin_runner import ForkServer
 from executor.batch.claim_pacing import ClaimPacer, StoreBackoff
+from executor.batch.fork_errors import ForkServerError
 from executor.batch.forked_run import ForkedRun, Reply
 from executor.batch.hand_over import HandOver
 from executor.batch.inbox import Inbox
@@ -111,7 +112,7 @@ class Worker:
         self._started = 0
         self._unsure_claims = False                    # a claim may have committed unheard: heartbeat soon
         self._shown_running: set[int] = set()          # jobs the display counts as running
-        self._taken_back: set[int] = set()             # jobs a stop took back before their start, to give back
+        self._taken_back: dict[int, int] = {}          # jobs taken back before their start (id: batch id), to give back
         self._folders = JobFolders()
 
     # ------------------------------------------------------------------ control
@@ -218,10 +219,10 @@ class Worker:
     def _give_back_taken(self) -> None:
         """Give the jobs taken back before their start back to the queue, all in one store statement,
         under the back-off: a stop's (claimed and not handed over, or withdrawn from the fork server) and
-        those a fork server ended before forking them. In a batch halted meanwhile they are halted too
-        (nothing claims from it any more)."""
-        self.store.release(self.identity, self._taken_back)
-        self.recorder.halt_again()
+        those a fork server ended before forking them. Those of a batch this worker halted meanwhile are
+        cancelled as its halt cancelled the rest (nothing claims from it any more)."""
+        halted = [job_id for job_id, batch_id in self._taken_back.items() if self.recorder.halted(batch_id)]
+        self.store.release(self.identity, self._taken_back, halted=halted)
         self._taken_back.clear()
 
     def _store_step(self, step: Callable[[], None]) -> bool:
@@ -248,6 +249,7 @@ class Worker:
             self._unsure_claims = True      # the claim may have committed without us hearing back
             raise
         self.pacer.claimed(limit, len(jobs))
+        self.recorder.claimed_from({job.batch_id for job in jobs})
         self._waiting.extend(jobs)
         self._start_waiting()
 
@@ -381,7 +383,7 @@ class Worker:
         return counts[JobState.QUEUED] + counts[JobState.RUNNING]
 
     def _cancel_all(self) -> None:
-        self._taken_back.update(job.id for job in self._waiting)   # claimed, never started: back to the queue
+        self._taken_back.update((job.id, job.batch_id) for job in self._waiting)   # claimed, never started: back
         self._waiting.clear()
         if self._force.is_set():
             for run in self._stopping_order():
@@ -469,9 +471,9 @@ class Worker:
         if isinstance(event, Done):
             self._runs.pop(job.id, None)
             self._driven.pop(job.id, None)
-            if never_started(event.result):       # taken back before its start (a stop): back to the
-                if not event.run.lost:            # queue, as the jobs claimed and not handed over
-                    self._taken_back.add(job.id)
+            if never_started(event.result):       # taken back before its start (a stop, its server's end):
+                if not event.run.lost:            # back to the queue, as the jobs claimed and not handed over
+                    self._taken_back[job.id] = job.batch_id
                 return
         else:
             self.hand_over.started(event.at)

@@ -13,7 +13,8 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from executor.batch.builtin_runner import ForkServer, ForkServerError, forkers_for, spare_cores
+from executor.batch.builtin_runner import ForkServer, forkers_for, spare_cores
+from executor.batch.fork_errors import ForkServerError
 from executor.children.process import RUNNER_ENV
 from store.jobs import WorkerIdentity
 

@@ -224,6 +224,7 @@ class Worker:
         halted = [job_id for job_id, batch_id in self._taken_back.items() if self.recorder.halted(batch_id)]
         self.store.release(self.identity, self._taken_back, halted=halted)
         self._taken_back.clear()
+        self.pacer.wake()                 # (those of a fork server that ended run on the next one at once)
 
     def _store_step(self, step: Callable[[], None]) -> bool:
         """Run a store step under the back-off; whether the store took it."""

@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from batch_fixtures import alive, cli_env, marked, run_cli, start_cli, wait_until_unmarked
+from batch_fixtures import alive, cli_env, marked, run_cli, server_of, start_cli, wait_until_unmarked
 from probe_variants import make_variants, records
 from tests_schema import assert_valid
 
@@ -170,22 +170,6 @@ def test_kill_9_of_the_runner_leaves_no_process_and_resume_finishes(tmp_path, la
     assert all(runs[f"k{int(job[3:])}"] == 1 for job in finished), "a finished job ran again"
 
 
-def _fork_servers(pid: int) -> list[int]:
-    """The fork servers among the children of process ``pid``."""
-    try:
-        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
-    except OSError:
-        return []
-    found = []
-    for child in children:
-        try:
-            if b"executor.batch.fork_server" in Path(f"/proc/{child}/cmdline").read_bytes():
-                found.append(int(child))
-        except OSError:
-            pass
-    return found
-
-
 @pytest.mark.parametrize(("slots", "count", "pause"), [(2, 30, 0.3), (1, 6, 1.0)], ids=["loop", "threads"])
 def test_jobs_waiting_at_a_fork_server_that_died_run_on_the_next_one(tmp_path, slots, count, pause):
     """The fork server is killed while it runs jobs and holds more for the next free slots: the running
@@ -196,11 +180,12 @@ def test_jobs_waiting_at_a_fork_server_that_died_run_on_the_next_one(tmp_path, s
     env = make_variants(tmp_path, names, pause=pause)
     runner = start_cli(["-i", "out", "-o", "res", "-j", str(slots)], tmp_path, env)
     deadline = time.monotonic() + 60
-    while len(records(tmp_path)) < slots or not _fork_servers(runner.pid):
+    while len(records(tmp_path)) < slots or server_of(runner.pid) is None:
         assert time.monotonic() < deadline and runner.poll() is None, runner.stdout.read()
         time.sleep(0.02)
     time.sleep(pause / 2)                                # the next jobs are under way, the ones after wait
-    [server] = _fork_servers(runner.pid)
+    server = server_of(runner.pid)
+    assert server is not None
     os.kill(server, signal.SIGKILL)
     out = runner.communicate(timeout=120)[0]
     with sqlite3.connect(tmp_path / ".scenario_store.db") as conn:

@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from batch_fixtures import alive, cli_env, marked, run_cli, start_cli
+from batch_fixtures import alive, cli_env, marked, run_cli, server_of, start_cli
 
 from executor.batch.builtin_runner import ForkServer
 from executor.batch.hand_over import HandOver
@@ -27,23 +27,6 @@ def started_at(pid: int) -> float:
         ticks = int(handle.read().rsplit(")", 1)[1].split()[19])
     boot = time.time() - time.clock_gettime(time.CLOCK_BOOTTIME)
     return boot + ticks / os.sysconf("SC_CLK_TCK")
-
-
-def server_of(runner: int) -> int | None:
-    """The fork server among ``runner``'s children (None while there is none)."""
-    try:
-        with open(f"/proc/{runner}/task/{runner}/children") as handle:
-            children = [int(pid) for pid in handle.read().split()]
-    except OSError:
-        return None
-    for child in children:
-        try:
-            with open(f"/proc/{child}/cmdline", "rb") as handle:
-                if b"executor.batch.fork_server" in handle.read():
-                    return child
-        except OSError:
-            continue
-    return None
 
 
 def store_state(path: Path) -> tuple[int, tuple[float] | None]:

@@ -303,7 +303,6 @@ class QueueStore(QueueReads):
         cols = [jobs.c.id, jobs.c.attempts, jobs.c.worker_id, jobs.c.worker_host, jobs.c.child_pid,
                 jobs.c.lost]
         now = time.time()
-        out: list[Reclaimed] = []
         with self._tx() as conn:
             returned = self._move(conn, Transition.RECLAIM, JobState.QUEUED,
                                   [*where, jobs.c.child_pid.is_(None), jobs.c.attempts <= UNCHARGED_CLAIMS],
@@ -319,16 +318,18 @@ class QueueStore(QueueReads):
                                    dict(lost=jobs.c.lost + 1, lease_expires_at=None, finished_at=now,
                                         reason=f"{reason} {max_lost} times; the job keeps losing its worker"),
                                    returning=cols)
-            for rows, status in ((requeued, JobState.QUEUED), (abandoned, JobState.ERROR)):
-                for r in rows:
-                    out.append(Reclaimed(job_id=r.id, attempt=r.attempts, worker_id=r.worker_id,
-                                         worker_host=r.worker_host, child_pid=r.child_pid, status=status))
-            if out:
+            charged = [*_reclaimed(requeued, JobState.QUEUED), *_reclaimed(abandoned, JobState.ERROR)]
+            if charged:
                 conn.execute(insert(job_attempts), [
                     dict(job_id=r.job_id, attempt=r.attempt, outcome="lost", finished_at=now,
-                         worker_id=r.worker_id, host=r.worker_host, reason=reason) for r in out])
-        return out + [Reclaimed(job_id=r.id, attempt=r.attempts, worker_id=r.worker_id, worker_host=r.worker_host,
-                                child_pid=None, status=JobState.QUEUED) for r in returned]
+                         worker_id=r.worker_id, host=r.worker_host, reason=reason) for r in charged])
+        return [*charged, *_reclaimed(returned, JobState.QUEUED)]
+
+
+def _reclaimed(rows: Sequence[Any], status: JobState) -> list[Reclaimed]:
+    """The jobs of ``rows`` (returned by ``QueueStore._reclaim``'s moves) taken back, now in ``status``."""
+    return [Reclaimed(job_id=r.id, attempt=r.attempts, worker_id=r.worker_id, worker_host=r.worker_host,
+                      child_pid=r.child_pid, status=status) for r in rows]
 
 
 def _is_transient(exc: DBAPIError) -> bool:

@@ -169,6 +169,30 @@ def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their
     assert not (folder / "out" / "j3").exists()
 
 
+@pytest.mark.parametrize("forkers", [1, 2])
+def test_a_request_the_server_cannot_prepare_for_any_reason_fails_alone_and_the_server_serves_on(folder, forkers):
+    """Whatever goes wrong while the server prepares a job (here a request whose output root is not a
+    pair: a ValueError, not an OSError) ends that request as ``failed``; it does not end the server and,
+    with it, the jobs it runs (each such request would otherwise cost a new server and every job on it)."""
+    server = ForkServer(limit=2, forkers=forkers).start()
+    jobs = Jobs(server, folder)
+    try:
+        jobs.submit(0, str(folder / "slow.osc"))
+        jobs.wait_for_starts(1)
+        out = folder / "out" / "bad"
+        server.submit(["scenario_execution", str(folder / "quick.osc"), "--output-dir", str(out)], cwd=str(folder),
+                      environment={}, log_path=str(out / "log.txt"), append=False, log_folder=(str(folder),),
+                      reply=lambda message: jobs._heard(1, message))
+        jobs.submit(2, str(folder / "quick.osc"))
+        jobs.wait_for(3)
+        assert server.alive
+    finally:
+        server.close()
+    assert jobs.events("failed") == [1] and sorted(jobs.events("exited")) == [0, 2]
+    failure = next(m for m in jobs.messages if m.get("event") == "failed")
+    assert "cannot prepare the job: ValueError" in str(failure["reason"])
+
+
 def test_kept_requests_the_socket_refuses_are_answered_as_failed_while_the_server_lives_on(folder):
     """A message larger than the socket's send buffer is refused (EMSGSIZE) and the server never hears of
     those requests: each is answered here (``failed``), none waits for good, and the server serves on."""

@@ -315,6 +315,10 @@ class _Server:
                                      f"cannot open its log {request['log']}: {exc.strerror or exc}"})
                     self._done_with()
                     continue
+                except Exception as exc:  # noqa: BLE001 - one request must not end the server and its jobs
+                    send(self.sock, {"id": request_id, "event": "failed", "reason": f"cannot prepare the job: {exc!r}"})
+                    self._done_with()
+                    continue
             self._spawn(request, fd)
 
     def _withdraw(self, request_id: str) -> None:

@@ -15,6 +15,8 @@ shown only with ``-d/--debug``, which the shared option reports here while the c
 
 from __future__ import annotations
 
+import atexit
+import gc
 import sys
 from collections.abc import Callable, Sequence
 from typing import NoReturn
@@ -27,6 +29,30 @@ from coverage_engine.printable import printable_lines
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+
+
+def _collect_once_then_freeze() -> None:
+    gc.collect()          # the run's garbage, finalized as the ending interpreter would have
+    gc.freeze()           # what is left is the modules' own: never scanned again while they are torn down
+
+
+def end_without_repeated_collections() -> None:
+    """Have the ending interpreter collect its garbage once, not again and again over every object left.
+
+    Once the ``atexit`` functions have run, an ending interpreter clears its modules and collects
+    garbage over every object still held, SQLAlchemy's, click's and the runtime's, hundreds of thousands
+    for a command, more than once. Measured on this project's 2-core VM: 0.1 s of CPU and of wall time
+    at the end of a batch process (a fifth of a one-job batch's own CPU), 0.03 s of it for one
+    collection. So an ``atexit`` function registered as the command starts (it
+    runs after those registered while the command ran: temporary folders removed, logs flushed) collects
+    once, so the run's garbage is finalized as before (an object in a reference cycle still gets its
+    ``__del__``), and ``gc.freeze`` leaves the rest out of the collections that follow: what the modules
+    hold is freed by reference counts as they are cleared, or by the operating system.
+    Registered only here, where a command is a process's entry point: a test that calls a command in its
+    own process freezes nothing before that process ends.
+    """
+    atexit.unregister(_collect_once_then_freeze)
+    atexit.register(_collect_once_then_freeze)
 
 
 class Boundary:
@@ -46,6 +72,7 @@ class Boundary:
 
     def main(self, command: click.Command, args: Sequence[str] | None = None) -> NoReturn:
         """Run ``command`` with ``args`` (default: the process's) and exit with its code."""
+        end_without_repeated_collections()
         sys.exit(self.run(command, args))
 
     def report(self, exc: Exception) -> int:

@@ -32,24 +32,26 @@ EXIT_INTERRUPTED = 130
 
 
 def _collect_once_then_freeze() -> None:
-    gc.collect()          # the run's garbage, finalized as the ending interpreter would have
-    gc.freeze()           # what is left is the modules' own: never scanned again while they are torn down
+    gc.collect()          # what is garbage by now is finalized, as the ending interpreter would have done
+    gc.freeze()           # what is still held is never scanned again while the modules are torn down
 
 
-def end_without_repeated_collections() -> None:
+def end_with_one_collection() -> None:
     """Have the ending interpreter collect its garbage once, not again and again over every object left.
 
-    Once the ``atexit`` functions have run, an ending interpreter clears its modules and collects
-    garbage over every object still held, SQLAlchemy's, click's and the runtime's, hundreds of thousands
-    for a command, more than once. Measured on this project's 2-core VM: 0.1 s of CPU and of wall time
-    at the end of a batch process (a fifth of a one-job batch's own CPU), 0.03 s of it for one
-    collection. So an ``atexit`` function registered as the command starts (it
-    runs after those registered while the command ran: temporary folders removed, logs flushed) collects
-    once, so the run's garbage is finalized as before (an object in a reference cycle still gets its
-    ``__del__``), and ``gc.freeze`` leaves the rest out of the collections that follow: what the modules
-    hold is freed by reference counts as they are cleared, or by the operating system.
-    Registered only here, where a command is a process's entry point: a test that calls a command in its
-    own process freezes nothing before that process ends.
+    An ending interpreter clears its modules and collects garbage over every object still held,
+    SQLAlchemy's, click's and ours, hundreds of thousands, more than once. Measured on this project's
+    2-core VM: 0.1 s of CPU and of wall time at the end of a batch process (a fifth of a one-job batch's
+    own CPU); one collection, done here instead, costs 0.03 s of it. Registered as an ``atexit``
+    function as the command starts, it runs after those registered while the command ran and before
+    those registered earlier (``logging``'s, which flushes its handlers by itself): it finalizes what
+    is garbage by then, and ``gc.freeze`` leaves everything still held out of the collections that
+    follow. An object still held at that moment (by a module, a cache) is freed by its reference count
+    as the modules are cleared, or not at all: a reference cycle among such objects no longer gets its
+    ``__del__``, nor its buffered file a flush. So only a command that runs no one else's Python in its
+    own process (no plugin, no external method, no scenario folder's module) asks for this:
+    ``Boundary(..., quick_end=True)``. A test that runs such a command in its own process freezes that
+    process as it ends.
     """
     atexit.unregister(_collect_once_then_freeze)
     atexit.register(_collect_once_then_freeze)
@@ -58,12 +60,15 @@ def end_without_repeated_collections() -> None:
 class Boundary:
     """Runs one click command and maps whatever escapes it; ``prog`` is the name in usage texts.
 
-    ``one_line_name``: print every message on one line as ``<name>: error: …``.
+    ``one_line_name``: print every message on one line as ``<name>: error: …``. ``quick_end``: the
+    command runs no one else's Python in its process, which may then end with one garbage collection
+    (:func:`end_with_one_collection`).
     """
 
-    def __init__(self, prog: str, *, one_line_name: str | None = None) -> None:
+    def __init__(self, prog: str, *, one_line_name: str | None = None, quick_end: bool = False) -> None:
         self.prog = prog
         self.one_line_name = one_line_name
+        self.quick_end = quick_end
         self.tracebacks = False
 
     def show_tracebacks(self) -> None:
@@ -72,7 +77,8 @@ class Boundary:
 
     def main(self, command: click.Command, args: Sequence[str] | None = None) -> NoReturn:
         """Run ``command`` with ``args`` (default: the process's) and exit with its code."""
-        end_without_repeated_collections()
+        if self.quick_end:
+            end_with_one_collection()
         sys.exit(self.run(command, args))
 
     def report(self, exc: Exception) -> int:

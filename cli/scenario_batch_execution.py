@@ -447,7 +447,7 @@ def main(argv: list[str] | None = None) -> None:
     if args and args[0] in SUBCOMMANDS:
         command, prog = SUBCOMMANDS[args[0]], f"{PROG} {args[0]}"
         args = args[1:]
-    boundary = Boundary(prog, one_line_name=PROG)
+    boundary = Boundary(prog, one_line_name=PROG, quick_end=True)   # (its jobs run in processes of their own)
     if args and not args[0].startswith("-") and command is run_command:
         word = args[0]
         sys.exit(boundary.guarded(lambda: _unknown_subcommand(word)))

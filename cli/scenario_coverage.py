@@ -196,7 +196,7 @@ def group() -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point; errors become messages and exit codes in :mod:`cli.boundary`."""
-    Boundary(PROG).main(group, argv)
+    Boundary(PROG, quick_end=True).main(group, argv)     # (it reads results: it runs no scenario)
 
 
 if __name__ == "__main__":  # pragma: no cover

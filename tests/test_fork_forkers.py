@@ -190,7 +190,7 @@ def test_a_request_the_server_cannot_prepare_for_any_reason_fails_alone_and_the_
         server.close()
     assert jobs.events("failed") == [1] and sorted(jobs.events("exited")) == [0, 2]
     failure = next(m for m in jobs.messages if m.get("event") == "failed")
-    assert "cannot prepare the job: ValueError" in str(failure["reason"])
+    assert "internal error while preparing the job: ValueError" in str(failure["reason"])
 
 
 def test_kept_requests_the_socket_refuses_are_answered_as_failed_while_the_server_lives_on(folder):

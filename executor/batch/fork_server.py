@@ -316,7 +316,8 @@ class _Server:
                     self._done_with()
                     continue
                 except Exception as exc:  # noqa: BLE001 - one request must not end the server and its jobs
-                    send(self.sock, {"id": request_id, "event": "failed", "reason": f"internal error while preparing the job: {exc!r}"})
+                    send(self.sock, {"id": request_id, "event": "failed",
+                                     "reason": f"internal error while preparing the job: {exc!r}"})
                     self._done_with()
                     continue
             self._spawn(request, fd)

@@ -169,6 +169,59 @@ def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their
     assert not (folder / "out" / "j3").exists()
 
 
+#: An external method that leaves an exit function behind: it says when it begins, takes a while, says when it ended.
+ENDING_MODULE = """import atexit, pathlib, time
+
+def _slow_end(marker):
+    marker.write_text("ending")
+    time.sleep(2)
+    marker.write_text("ended")
+
+def start(path):
+    atexit.register(_slow_end, pathlib.Path(path))
+    return "started"
+"""
+
+ENDING = """import osc.helpers
+
+struct ending:
+    def start(path: string) -> string is external ending_mod.start()
+
+scenario ends_slowly:
+    do serial:
+        log(ending.start("{marker}"))
+        emit end
+"""
+
+
+def test_a_stop_that_comes_while_a_job_ends_lets_its_exit_functions_finish_without_a_traceback(folder):
+    """A cancel (SIGINT to the job's group) that reaches a job whose command has ended, while its exit
+    functions run, waits for them: the job ends as it would have, its log holds no KeyboardInterrupt
+    traceback (a -j 1 batch echoes that log to the terminal)."""
+    marker = folder / "marker.txt"
+    (folder / "ending_mod.py").write_text(ENDING_MODULE)
+    (folder / "ending.osc").write_text(ENDING.format(marker=marker))
+    server = ForkServer(limit=1).start()
+    jobs = Jobs(server, folder)
+    try:
+        jobs.submit(0, str(folder / "ending.osc"))
+        jobs.wait_for_starts(1)
+        deadline = time.monotonic() + 60
+        while not marker.exists():
+            assert time.monotonic() < deadline, jobs.replies
+            time.sleep(0.02)
+        pid = jobs.messages[0]["pid"]
+        os.killpg(pid, signal.SIGINT)                     # as the runner cancels a job
+        jobs.wait_for(1)
+    finally:
+        server.close()
+    status = next(m for m in jobs.messages if m.get("event") == "exited")["status"]
+    log = (folder / "out" / "j0" / "log.txt").read_text()
+    assert "Traceback" not in log and "KeyboardInterrupt" not in log, log
+    assert marker.read_text() == "ended"
+    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0, status
+
+
 @pytest.mark.parametrize("forkers", [1, 2])
 def test_a_request_the_server_cannot_prepare_for_any_reason_fails_alone_and_the_server_serves_on(folder, forkers):
     """Whatever goes wrong while the server prepares a job (here a request whose output root is not a

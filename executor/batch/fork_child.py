@@ -107,7 +107,8 @@ def run_child(request: dict, output_fd: int, close_server: Callable[[], None],
 
     The stop signals (``HELD_BACK``) come blocked from the server (or the spare); they are let
     through once the command is about to run. One that came meanwhile was meant for a job that had
-    not begun: the child ends by it at once, silently, as a process killed before it ran would.
+    not begun: the child ends by it at once, silently, as a process killed before it ran would. A
+    ``SIGINT`` that comes once the command has ended, while the exit functions run, is let pass.
     """
     code, interrupted = 1, False
     try:
@@ -141,6 +142,10 @@ def run_child(request: dict, output_fd: int, close_server: Callable[[], None],
             interrupted = isinstance(sys.exc_info()[1], KeyboardInterrupt)
             sys.excepthook(*sys.exc_info())
             code = 1
+        # The command has ended: a stop (SIGINT) that comes now would only break off the exit functions
+        # with a KeyboardInterrupt traceback in the job's output. It is let pass; the runner's kill after
+        # the grace still ends exit functions that hang.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         code = _finalize(code)
     finally:
         if interrupted:                    # as the interpreter ends on an uncaught Ctrl-C: by SIGINT

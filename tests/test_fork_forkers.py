@@ -169,12 +169,16 @@ def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their
     assert not (folder / "out" / "j3").exists()
 
 
-#: An external method that leaves an exit function behind: it says when it begins, takes a while, says when it ended.
+#: An external method that leaves an exit function behind: it says when it begins, waits for the test's
+#: go (a file beside the marker), says when it ended.
 ENDING_MODULE = """import atexit, pathlib, time
 
 def _slow_end(marker):
     marker.write_text("ending")
-    time.sleep(2)
+    go = marker.with_name("go")
+    deadline = time.monotonic() + 60
+    while not go.exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
     marker.write_text("ended")
 
 def start(path):
@@ -212,6 +216,8 @@ def test_a_stop_that_comes_while_a_job_ends_lets_its_exit_functions_finish_witho
             time.sleep(0.02)
         pid = jobs.messages[0]["pid"]
         os.killpg(pid, signal.SIGINT)                     # as the runner cancels a job
+        time.sleep(0.2)                                    # (a handler that raised would have by now)
+        (folder / "go").write_text("")
         jobs.wait_for(1)
     finally:
         server.close()

@@ -143,15 +143,20 @@ def run_child(request: dict, output_fd: int, close_server: Callable[[], None],
             sys.excepthook(*sys.exc_info())
             code = 1
         # The command has ended: a stop (SIGINT) that comes now would only break off the exit functions
-        # with a KeyboardInterrupt traceback in the job's output. It is let pass; the runner's kill after
-        # the grace still ends exit functions that hang.
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        # with a KeyboardInterrupt traceback in the job's output. It is let pass (by a handler, not
+        # SIG_IGN, which a process started meanwhile would inherit); the runner's kill after the grace
+        # still ends exit functions that hang.
+        signal.signal(signal.SIGINT, _let_pass)
         code = _finalize(code)
     finally:
         if interrupted:                    # as the interpreter ends on an uncaught Ctrl-C: by SIGINT
             signal.signal(signal.SIGINT, signal.SIG_DFL)
             os.kill(os.getpid(), signal.SIGINT)
         os._exit(code)
+
+
+def _let_pass(_signum: int, _frame: object) -> None:
+    """The ``SIGINT`` handler of a job whose command has ended (see :func:`run_child`)."""
 
 
 def _finalize(code: int) -> int:

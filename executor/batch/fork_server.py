@@ -308,16 +308,8 @@ class _Server:
             if fd is None:
                 try:
                     fd = open_log(request)
-                except OSError as exc:
-                    refused = isinstance(exc, FolderRefused)
-                    send(self.sock, {"id": request_id, "event": "failed", "errno": exc.errno, "folder": refused,
-                                     "reason": f"cannot prepare the job: {exc.strerror}" if refused else
-                                     f"cannot open its log {request['log']}: {exc.strerror or exc}"})
-                    self._done_with()
-                    continue
                 except Exception as exc:  # noqa: BLE001 - one request must not end the server and its jobs
-                    send(self.sock, {"id": request_id, "event": "failed",
-                                     "reason": f"internal error while preparing the job: {exc!r}"})
+                    send(self.sock, {"id": request_id, "event": "failed", **_unprepared(request, exc)})
                     self._done_with()
                     continue
             self._spawn(request, fd)
@@ -408,6 +400,17 @@ class _Server:
                 self._start_waiting()          # the slot's next job first, then the news
                 send(self.sock, {"id": job, "event": "exited", "pid": pid, "status": status, "at": ended})
                 self._done_with()
+
+
+def _unprepared(request: dict, exc: Exception) -> dict:
+    """What the ``failed`` reply says of a request whose folder or log could not be prepared: the error
+    (``errno``, whether the folder was refused) and its reason."""
+    if not isinstance(exc, OSError):
+        return {"reason": f"internal error while preparing the job: {exc!r}"}
+    refused = isinstance(exc, FolderRefused)
+    return {"errno": exc.errno, "folder": refused,
+            "reason": f"cannot prepare the job: {exc.strerror}" if refused else
+            f"cannot open its log {request['log']}: {exc.strerror or exc}"}
 
 
 def serve(fd: int, target: str, scratch: str, keep_spare: bool = False, limit: int = 0,

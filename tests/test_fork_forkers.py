@@ -24,6 +24,7 @@ from pathlib import Path
 
 import pytest
 from batch_fixtures import alive, marked, wait_until_unmarked
+from fork_jobs import Jobs, job_folder, parent_of
 from probe_variants import make_variants, records
 from tests_schema import assert_valid
 
@@ -34,14 +35,6 @@ from executor.batch.fork_protocol import MAX_MESSAGE, bundles, receive
 from executor.children.process import kill_orphan
 
 BIN = Path(sys.executable).parent
-
-QUICK = "import osc.helpers\n\nscenario quick:\n    do serial:\n        log('hi')\n        emit end\n"
-SLOW = "import osc.helpers\n\nscenario slow:\n    do serial:\n        wait elapsed({seconds}s)\n        emit end\n"
-
-
-def parent_of(pid: int) -> int:
-    with open(f"/proc/{pid}/stat") as handle:
-        return int(handle.read().rsplit(")", 1)[1].split()[1])
 
 
 def state_of(pid: int) -> str:
@@ -65,63 +58,9 @@ def children_of(pid: int) -> list[int]:
         return []
 
 
-class Jobs:
-    """Requests submitted to a server, and every reply in the order it came."""
-
-    def __init__(self, server: ForkServer, folder: Path) -> None:
-        self.server, self.folder = server, folder
-        self.replies: list[tuple[int, str, int | None]] = []    # (job, event, pid)
-        self.parents: dict[int, int] = {}                       # job -> the process that forked it
-        self.requests: dict[int, str] = {}
-        self.messages: list[dict] = []                          # the replies themselves
-
-    def submit(self, job: int, scenario: str, later: bool = False) -> None:
-        out = self.folder / "out" / f"j{job}"
-        root = str(self.folder / "out")
-        self.requests[job] = self.server.submit(
-            ["scenario_execution", scenario, "--output-dir", str(out)], cwd=str(self.folder), environment={},
-            log_path=str(out / "log.txt"), append=False, log_folder=(root, os.path.realpath(root)),
-            reply=lambda message: self._heard(job, message), later=later)
-
-    def _heard(self, job: int, message: dict) -> None:
-        self.replies.append((job, str(message.get("event")), message.get("pid")))
-        self.messages.append(message)
-        if message.get("event") == "started":
-            try:
-                self.parents[job] = parent_of(int(message["pid"]))
-            except OSError:
-                pass                         # a quick job may have ended and been reaped already
-
-    def events(self, kind: str) -> list[int]:
-        return [job for job, event, _pid in self.replies if event == kind]
-
-    def wait_for_starts(self, count: int, seconds: float = 60) -> None:
-        """Read replies until ``count`` requests have started."""
-        deadline = time.monotonic() + seconds
-        while len(self.events("started")) < count:
-            assert time.monotonic() < deadline, self.replies
-            select.select([self.server.fileno()], [], [], 0.2)
-            self.server.poll()
-
-    def wait_for(self, done: int, seconds: float = 60) -> None:
-        """Read replies until ``done`` requests have had their last word (or the server ended)."""
-        deadline = time.monotonic() + seconds
-        while len([r for r in self.replies if r[1] in ("exited", "withdrawn", "failed", "gone")]) < done:
-            assert time.monotonic() < deadline, self.replies
-            select.select([self.server.fileno()], [], [], 0.2)
-            if not self.server.poll():
-                return
-
-
 @pytest.fixture
-def folder(tmp_path, monkeypatch):
-    monkeypatch.setenv("TMPDIR", str(tmp_path / "tmp"))     # the server's scratch folder goes here
-    (tmp_path / "tmp").mkdir()
-    (tmp_path / "out").mkdir()
-    (tmp_path / "quick.osc").write_text(QUICK)
-    (tmp_path / "slow.osc").write_text(SLOW.format(seconds=1.5))
-    (tmp_path / "hang.osc").write_text(SLOW.format(seconds=60))
-    return tmp_path
+def folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    return job_folder(tmp_path, monkeypatch)
 
 
 def test_forkers_follow_the_slots_and_the_cores(monkeypatch):
@@ -167,110 +106,6 @@ def test_requests_kept_to_go_together_wait_for_send_submitted_and_start_in_their
         server.close()
     assert jobs.events("started") == [0, 1, 2, 4, 5] and jobs.events("exited") == [0, 1, 2, 4, 5]
     assert not (folder / "out" / "j3").exists()
-
-
-#: An external method that leaves an exit function behind: it says when it begins, waits for the test's
-#: go (a file beside the marker), says when it ended.
-ENDING_MODULE = """import atexit, pathlib, time
-
-def _slow_end(marker):
-    marker.write_text("ending")
-    go = marker.with_name("go")
-    deadline = time.monotonic() + 60
-    while not go.exists() and time.monotonic() < deadline:
-        time.sleep(0.01)
-    marker.write_text("ended")
-
-def start(path):
-    atexit.register(_slow_end, pathlib.Path(path))
-    return "started"
-"""
-
-ENDING = """import osc.helpers
-
-struct ending:
-    def start(path: string) -> string is external ending_mod.start()
-
-scenario ends_slowly:
-    do serial:
-        log(ending.start("{marker}"))
-        emit end
-"""
-
-
-def test_a_stop_that_comes_while_a_job_ends_lets_its_exit_functions_finish_without_a_traceback(folder):
-    """A cancel (SIGINT to the job's group) that reaches a job whose command has ended, while its exit
-    functions run, waits for them: the job ends as it would have, its log holds no KeyboardInterrupt
-    traceback (a -j 1 batch echoes that log to the terminal)."""
-    marker = folder / "marker.txt"
-    (folder / "ending_mod.py").write_text(ENDING_MODULE)
-    (folder / "ending.osc").write_text(ENDING.format(marker=marker))
-    server = ForkServer(limit=1).start()
-    jobs = Jobs(server, folder)
-    try:
-        jobs.submit(0, str(folder / "ending.osc"))
-        jobs.wait_for_starts(1)
-        deadline = time.monotonic() + 60
-        while not marker.exists():
-            assert time.monotonic() < deadline, jobs.replies
-            time.sleep(0.02)
-        pid = jobs.messages[0]["pid"]
-        os.killpg(pid, signal.SIGINT)                     # as the runner cancels a job
-        time.sleep(0.2)                                    # (a handler that raised would have by now)
-        (folder / "go").write_text("")
-        jobs.wait_for(1)
-    finally:
-        server.close()
-    status = next(m for m in jobs.messages if m.get("event") == "exited")["status"]
-    log = (folder / "out" / "j0" / "log.txt").read_text()
-    assert "Traceback" not in log and "KeyboardInterrupt" not in log, log
-    assert marker.read_text() == "ended"
-    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0, status
-
-
-@pytest.mark.parametrize("forkers", [1, 2])
-def test_a_request_the_server_cannot_prepare_for_any_reason_fails_alone_and_the_server_serves_on(folder, forkers):
-    """Whatever goes wrong while the server prepares a job (here a request whose output root is not a
-    pair: a ValueError, not an OSError) ends that request as ``failed``; it does not end the server and,
-    with it, the jobs it runs (each such request would otherwise cost a new server and every job on it)."""
-    server = ForkServer(limit=2, forkers=forkers).start()
-    jobs = Jobs(server, folder)
-    try:
-        jobs.submit(0, str(folder / "slow.osc"))
-        jobs.wait_for_starts(1)
-        out = folder / "out" / "bad"
-        server.submit(["scenario_execution", str(folder / "quick.osc"), "--output-dir", str(out)], cwd=str(folder),
-                      environment={}, log_path=str(out / "log.txt"), append=False, log_folder=(str(folder),),
-                      reply=lambda message: jobs._heard(1, message))
-        jobs.submit(2, str(folder / "quick.osc"))
-        jobs.wait_for(3)
-        assert server.alive
-    finally:
-        server.close()
-    assert jobs.events("failed") == [1] and sorted(jobs.events("exited")) == [0, 2]
-    failure = next(m for m in jobs.messages if m.get("event") == "failed")
-    assert "internal error while preparing the job: ValueError" in str(failure["reason"])
-
-
-def test_kept_requests_the_socket_refuses_are_answered_as_failed_while_the_server_lives_on(folder):
-    """A message larger than the socket's send buffer is refused (EMSGSIZE) and the server never hears of
-    those requests: each is answered here (``failed``), none waits for good, and the server serves on."""
-    server = ForkServer(limit=1).start()
-    jobs = Jobs(server, folder)
-    try:
-        server._sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)   # smaller than when it started
-        long_name = folder / ("q" * 200 + ".osc")
-        long_name.write_text(QUICK)
-        for job in range(30):
-            jobs.submit(job, str(long_name), later=True)
-        server.send_submitted()
-        assert sorted(jobs.events("failed")) == list(range(30)) and server.alive
-        assert "could not be sent" in str(next(m for m in jobs.messages if m.get("event") == "failed")["reason"])
-        jobs.submit(30, str(folder / "quick.osc"))                # one alone fits: it runs
-        jobs.wait_for(31)
-    finally:
-        server.close()
-    assert jobs.events("started") == [30] and jobs.events("exited") == [30]
 
 
 def test_two_forkers_share_the_slots_and_a_waiting_job_waits_for_one(folder):

@@ -182,19 +182,7 @@ def children_of(pid: int) -> list[tuple[int, bytes]]:
 
 def server_of(runner: int) -> int | None:
     """The fork server among ``runner``'s children (None while there is none)."""
-    try:
-        with open(f"/proc/{runner}/task/{runner}/children") as handle:
-            children = [int(pid) for pid in handle.read().split()]
-    except OSError:
-        return None
-    for child in children:
-        try:
-            with open(f"/proc/{child}/cmdline", "rb") as handle:
-                if b"executor.batch.fork_server" in handle.read():
-                    return child
-        except OSError:
-            continue
-    return None
+    return next((pid for pid, cmdline in children_of(runner) if b"executor.batch.fork_server" in cmdline), None)
 
 
 def watchdog_of(runner: int) -> int:
